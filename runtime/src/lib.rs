@@ -1,0 +1,2 @@
+//! The skillc runtime: learning from a demonstration, the robot model, the hybrid controller and the simulation.
+#![warn(missing_docs)]

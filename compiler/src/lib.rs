@@ -1,0 +1,1 @@
+//! Parse, check and lower `.skill` templates to the IR.

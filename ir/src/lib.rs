@@ -1,0 +1,1 @@
+//! The serde state-machine IR shared by the compiler and the runtime.

@@ -1,0 +1,2 @@
+//! The `skillc` command-line tool.
+fn main() {}

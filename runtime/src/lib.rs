@@ -1,2 +1,3 @@
 //! The skillc runtime: learning from a demonstration, the robot model, the hybrid controller and the simulation.
 #![warn(missing_docs)]
+pub mod robot;

@@ -1,0 +1,147 @@
+//! Rigid-body dynamics of the chain by recursive Newton-Euler: gravity, inverse dynamics, mass matrix, Coriolis.
+
+use nalgebra::{DMatrix, Vector3};
+
+use super::{JointKind, Robot, RobotData};
+
+impl Robot {
+    /// Gravity torques g(q) (N m, N) at the configuration of the last
+    /// [`Robot::forward_kinematics`]: the torques that hold the arm still.
+    ///
+    /// # Panics
+    /// If `out.len()` differs from [`Robot::dof`].
+    pub fn gravity_torques(&self, data: &mut RobotData, out: &mut [f64]) {
+        let zeros = std::mem::take(&mut data.zeros);
+        self.rnea(data, &zeros, &zeros, true, out);
+        data.zeros = zeros;
+    }
+
+    /// Inverse dynamics τ = M(q) q̈ + C(q, q̇) q̇ + g(q) at the configuration of the last
+    /// [`Robot::forward_kinematics`], by recursive Newton-Euler.
+    ///
+    /// # Panics
+    /// If a slice length differs from [`Robot::dof`].
+    pub fn inverse_dynamics(&self, data: &mut RobotData, qd: &[f64], qdd: &[f64], out: &mut [f64]) {
+        self.rnea(data, qd, qdd, true, out);
+    }
+
+    /// Coriolis and centrifugal torques C(q, q̇) q̇ at the configuration of the last
+    /// [`Robot::forward_kinematics`].
+    ///
+    /// # Panics
+    /// If a slice length differs from [`Robot::dof`].
+    pub fn coriolis_torques(&self, data: &mut RobotData, qd: &[f64], out: &mut [f64]) {
+        let zeros = std::mem::take(&mut data.zeros);
+        self.rnea(data, qd, &zeros, false, out);
+        data.zeros = zeros;
+    }
+
+    /// The joint-space mass matrix M(q) at the configuration of the last
+    /// [`Robot::forward_kinematics`] (one Newton-Euler pass per column).
+    ///
+    /// # Panics
+    /// If `out` is not dof × dof.
+    pub fn mass_matrix(&self, data: &mut RobotData, out: &mut DMatrix<f64>) {
+        let n = self.dof();
+        assert_eq!(out.shape(), (n, n), "mass matrix must be dof x dof");
+        let zeros = std::mem::take(&mut data.zeros);
+        let mut unit = std::mem::take(&mut data.unit);
+        let mut column = std::mem::take(&mut data.column);
+        for col in 0..n {
+            unit.fill(0.0);
+            unit[col] = 1.0;
+            self.rnea(data, &zeros, &unit, false, &mut column);
+            for row in 0..n {
+                out[(row, col)] = column[row];
+            }
+        }
+        // Symmetrise away round-off so Cholesky users see an exactly symmetric matrix.
+        for row in 0..n {
+            for col in row + 1..n {
+                let mean = 0.5 * (out[(row, col)] + out[(col, row)]);
+                out[(row, col)] = mean;
+                out[(col, row)] = mean;
+            }
+        }
+        data.zeros = zeros;
+        data.unit = unit;
+        data.column = column;
+    }
+
+    /// Recursive Newton-Euler in body frames (Luh, Walker, Paul), gravity optional.
+    fn rnea(
+        &self,
+        data: &mut RobotData,
+        qd: &[f64],
+        qdd: &[f64],
+        with_gravity: bool,
+        out: &mut [f64],
+    ) {
+        let n = self.dof();
+        debug_assert!(data.kinematics_done, "call forward_kinematics first");
+        assert!(
+            qd.len() == n && qdd.len() == n && out.len() == n,
+            "vectors must have dof entries"
+        );
+        let mut omega_prev = Vector3::zeros();
+        let mut omega_dot_prev = Vector3::zeros();
+        // The base accelerates upwards at g: gravity enters as a fictitious base acceleration.
+        let mut acc_prev = if with_gravity {
+            -self.gravity
+        } else {
+            Vector3::zeros()
+        };
+        for (idx, body) in self.bodies.iter().enumerate() {
+            let rot_t = data.local_rot[idx].transpose();
+            let pos = &data.local_pos[idx];
+            let acc = rot_t
+                * (acc_prev + omega_dot_prev.cross(pos) + omega_prev.cross(&omega_prev.cross(pos)));
+            let omega_in = rot_t * omega_prev;
+            let omega_dot_in = rot_t * omega_dot_prev;
+            let (omega, omega_dot, acc) = match body.kind {
+                JointKind::Revolute => {
+                    let spin = body.axis * qd[idx];
+                    (
+                        omega_in + spin,
+                        omega_dot_in + omega_in.cross(&spin) + body.axis * qdd[idx],
+                        acc,
+                    )
+                }
+                JointKind::Prismatic => {
+                    let slide = body.axis * qd[idx];
+                    (
+                        omega_in,
+                        omega_dot_in,
+                        acc + 2.0 * omega_in.cross(&slide) + body.axis * qdd[idx],
+                    )
+                }
+            };
+            let acc_com = acc + omega_dot.cross(&body.com) + omega.cross(&omega.cross(&body.com));
+            let force = acc_com * body.mass;
+            let inertia_omega = body.inertia * omega;
+            data.force[idx] = force;
+            data.moment[idx] =
+                body.inertia * omega_dot + omega.cross(&inertia_omega) + body.com.cross(&force);
+            data.omega[idx] = omega;
+            data.omega_dot[idx] = omega_dot;
+            omega_prev = omega;
+            omega_dot_prev = omega_dot;
+            acc_prev = acc;
+        }
+        let mut child_force = Vector3::zeros();
+        let mut child_moment = Vector3::zeros();
+        for idx in (0..n).rev() {
+            let force = data.force[idx] + child_force;
+            let moment = data.moment[idx] + child_moment;
+            let body = &self.bodies[idx];
+            out[idx] = match body.kind {
+                JointKind::Revolute => body.axis.dot(&moment),
+                JointKind::Prismatic => body.axis.dot(&force),
+            };
+            // The wrench this body's joint transmits, seen in the parent frame about the parent origin.
+            let rot = &data.local_rot[idx];
+            child_force = rot * force;
+            child_moment = rot * moment + data.local_pos[idx].cross(&child_force);
+        }
+    }
+}

@@ -1,0 +1,145 @@
+//! Errors from reading a robot description and building its model.
+
+use std::path::PathBuf;
+
+/// Why a URDF could not be turned into a [`Robot`](super::Robot).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RobotError {
+    /// The file could not be read.
+    #[error("cannot read `{path}`: {source}")]
+    Io {
+        /// The file that was asked for.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// The text is not a URDF that urdf-rs understands (bad XML, missing attributes, bad numbers).
+    #[error("malformed urdf `{file}`: {message}")]
+    Urdf {
+        /// The file (or `<string>`).
+        file: String,
+        /// urdf-rs's description.
+        message: String,
+    },
+    /// A link name (the tool, the sensor frame, …) that the robot does not declare.
+    #[error("unknown link `{name}` in robot `{robot}` (links: {known})")]
+    UnknownLink {
+        /// The name asked for.
+        name: String,
+        /// The robot's name.
+        robot: String,
+        /// The links it has, comma separated.
+        known: String,
+    },
+    /// A joint whose parent or child is not a `<link>` of the file.
+    #[error("joint `{joint}` refers to unknown link `{link}`")]
+    JointLinkMissing {
+        /// The joint.
+        joint: String,
+        /// The missing link.
+        link: String,
+    },
+    /// A link that is the child of two joints.
+    #[error("link `{link}` is the child of several joints: a robot description must be a tree")]
+    SeveralParents {
+        /// The link.
+        link: String,
+    },
+    /// Not exactly one link without a parent.
+    #[error(
+        "expected exactly one root link (a link that is no joint's child), found {count}: {roots}"
+    )]
+    Roots {
+        /// How many there were.
+        count: usize,
+        /// Their names, comma separated.
+        roots: String,
+    },
+    /// A link with more than one child joint: only serial chains are supported.
+    #[error("link `{link}` has several child joints ({joints}): only serial chains are supported")]
+    NotSerial {
+        /// The branching link.
+        link: String,
+        /// Its child joints, comma separated.
+        joints: String,
+    },
+    /// A joint type the model does not support (floating, planar, spherical).
+    #[error("joint `{joint}` has unsupported type `{kind}` (supported: revolute, continuous, prismatic, fixed)")]
+    UnsupportedJoint {
+        /// The joint.
+        joint: String,
+        /// Its URDF type.
+        kind: String,
+    },
+    /// No revolute or prismatic joint on the way to the tool.
+    #[error("robot `{robot}` has no movable joint before tool link `{tool}`")]
+    NoMovingJoint {
+        /// The robot's name.
+        robot: String,
+        /// The tool link.
+        tool: String,
+    },
+    /// A zero-length joint axis.
+    #[error("joint `{joint}` has a zero or non-finite axis")]
+    BadAxis {
+        /// The joint.
+        joint: String,
+    },
+    /// Joint limits that cannot hold (lower above upper, non-positive effort or velocity).
+    #[error("joint `{joint}` has invalid limits: {reason}")]
+    BadLimit {
+        /// The joint.
+        joint: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A mass below zero.
+    #[error("link `{link}` has negative mass {mass} kg")]
+    NegativeMass {
+        /// The link.
+        link: String,
+        /// The mass read.
+        mass: f64,
+    },
+    /// A mass of zero with a non-zero inertia tensor.
+    #[error("link `{link}` has zero mass but a non-zero inertia tensor")]
+    ZeroMass {
+        /// The link.
+        link: String,
+    },
+    /// An inertia tensor that is not symmetric positive definite.
+    #[error("link `{link}` has an inertia tensor that is not positive definite (eigenvalues {eigenvalues})")]
+    InertiaNotSpd {
+        /// The link.
+        link: String,
+        /// Its eigenvalues, for the message.
+        eigenvalues: String,
+    },
+    /// A movable joint that moves no mass at all: the dynamics would be singular.
+    #[error(
+        "joint `{joint}` moves no mass: link `{link}` needs an `<inertial>` with a positive mass"
+    )]
+    MissingInertial {
+        /// The joint.
+        joint: String,
+        /// The link right after it.
+        link: String,
+    },
+    /// A NaN or infinite number where a finite one is needed.
+    #[error("`{item}` is not a finite number")]
+    NonFinite {
+        /// What it was (`joint a1 origin`, `link l1 mass`, …).
+        item: String,
+    },
+    /// A joint vector of the wrong length.
+    #[error("expected {expected} joint values for robot `{robot}`, got {got}")]
+    WrongDof {
+        /// The robot's name.
+        robot: String,
+        /// Its number of joints.
+        expected: usize,
+        /// What was given.
+        got: usize,
+    },
+}

@@ -1,0 +1,293 @@
+//! One kinesthetic demonstration: reading it from CSV, validating it, resampling and filtering it.
+//!
+//! **Sign convention:** `force_n` and `torque_nm` hold the wrench the wrist force/torque sensor
+//! measures, that is the wrench the *environment exerts on the tool*, in the robot base frame.
+//! The wrench the robot applies to the environment is its negative. Every module of the runtime
+//! keeps this convention; functions that need the applied force negate explicitly and say so.
+//!
+//! Units are SI throughout: seconds, metres, newtons, newton-metres. Poses are the tool (flange)
+//! pose in the robot base frame.
+
+mod csv;
+mod filter;
+mod quat;
+mod resample;
+
+pub use self::csv::{parse_csv, read_csv, ReadOptions, COLUMNS};
+pub use self::filter::{low_pass, FilterOrder};
+pub use self::resample::resample;
+
+use nalgebra::{UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// A demonstration as parallel per-sample arrays (all of length [`Demo::len`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Demo {
+    /// Name of the source (file path), used in messages.
+    pub source: String,
+    /// Sample times [s], strictly increasing, not necessarily evenly spaced.
+    pub t_s: Vec<f64>,
+    /// Tool position in the base frame [m].
+    pub position_m: Vec<Vector3<f64>>,
+    /// Tool orientation in the base frame, unit and sign-continuous (`q[k]·q[k-1] ≥ 0`).
+    pub orientation: Vec<UnitQuaternion<f64>>,
+    /// Measured force in the base frame [N]: the force the environment exerts on the tool.
+    pub force_n: Vec<Vector3<f64>>,
+    /// Measured torque in the base frame [Nm]: the torque the environment exerts on the tool.
+    pub torque_nm: Vec<Vector3<f64>>,
+}
+
+impl Demo {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// True when the demonstration has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    /// Duration from the first to the last sample [s] (0 for fewer than two samples).
+    pub fn duration_s(&self) -> f64 {
+        match (self.t_s.first(), self.t_s.last()) {
+            (Some(first), Some(last)) => last - first,
+            _ => 0.0,
+        }
+    }
+
+    /// Mean sampling period [s] (0 for fewer than two samples).
+    pub fn mean_dt_s(&self) -> f64 {
+        if self.len() < 2 {
+            0.0
+        } else {
+            self.duration_s() / (self.len() - 1) as f64
+        }
+    }
+
+    /// The samples `range` as a new demonstration (times kept as they are).
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Demo {
+        Demo {
+            source: self.source.clone(),
+            t_s: self.t_s[range.clone()].to_vec(),
+            position_m: self.position_m[range.clone()].to_vec(),
+            orientation: self.orientation[range.clone()].to_vec(),
+            force_n: self.force_n[range.clone()].to_vec(),
+            torque_nm: self.torque_nm[range].to_vec(),
+        }
+    }
+}
+
+/// Something the reader fixed and the user should know about; the data is still usable.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub enum DemoWarning {
+    /// Quaternions whose norm differed from 1 by more than `1e-6` were normalised.
+    Renormalised {
+        /// Source file.
+        file: String,
+        /// How many rows were normalised.
+        count: usize,
+        /// First such row (1-based line number in the file).
+        first_row: usize,
+        /// Largest `| |q| - 1 |` seen.
+        max_deviation: f64,
+    },
+    /// Quaternions were negated so that consecutive samples lie in the same hemisphere.
+    SignFlipped {
+        /// Source file.
+        file: String,
+        /// How many rows were negated.
+        count: usize,
+        /// First such row (1-based line number in the file).
+        first_row: usize,
+    },
+}
+
+impl std::fmt::Display for DemoWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DemoWarning::Renormalised { file, count, first_row, max_deviation } => write!(
+                f,
+                "normalised {count} non-unit quaternion(s) in `{file}` (first at row {first_row}, largest norm error {max_deviation:.3e})"
+            ),
+            DemoWarning::SignFlipped { file, count, first_row } => write!(
+                f,
+                "negated {count} quaternion(s) in `{file}` to make them sign-continuous (first at row {first_row})"
+            ),
+        }
+    }
+}
+
+/// A demonstration with the warnings produced while loading or preprocessing it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Loaded {
+    /// The demonstration.
+    pub demo: Demo,
+    /// What was fixed on the way.
+    pub warnings: Vec<DemoWarning>,
+}
+
+/// Optional preprocessing applied after reading: first resampling, then low-pass filtering.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PreprocessConfig {
+    /// Resample to this fixed rate [Hz] (linear interpolation, slerp for orientation).
+    pub resample_hz: Option<f64>,
+    /// Zero-phase low-pass cut-off [Hz]; needs evenly spaced samples (set `resample_hz` for
+    /// irregular data, or the mean rate is used when the spacing varies by less than 1 %).
+    pub lowpass_cutoff_hz: Option<f64>,
+    /// Order of the low-pass (applied forwards and backwards, so the effective order doubles).
+    pub lowpass_order: FilterOrder,
+}
+
+/// Applies `config` to `demo`: resampling first, then filtering.
+pub fn preprocess(demo: &Demo, config: &PreprocessConfig) -> Result<Demo, DemoError> {
+    let mut out = match config.resample_hz {
+        Some(rate_hz) => resample(demo, rate_hz)?,
+        None => demo.clone(),
+    };
+    if let Some(cutoff_hz) = config.lowpass_cutoff_hz {
+        out = low_pass(&out, cutoff_hz, config.lowpass_order)?;
+    }
+    Ok(out)
+}
+
+/// Problems with a demonstration file or with the parameters used to preprocess it.
+///
+/// Rows are 1-based line numbers in the file (the header is row 1).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DemoError {
+    /// The file could not be read.
+    #[error("cannot read demonstration `{file}`")]
+    Io {
+        /// Path of the file.
+        file: String,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file holds nothing, not even a header.
+    #[error("demonstration `{file}` is empty")]
+    Empty {
+        /// Path of the file.
+        file: String,
+    },
+    /// The file holds a header but no data rows.
+    #[error("demonstration `{file}` has a header but no data rows")]
+    HeaderOnly {
+        /// Path of the file.
+        file: String,
+    },
+    /// Required columns are absent from the header.
+    #[error("demonstration `{file}` lacks column(s) {}", list_columns(.columns))]
+    MissingColumns {
+        /// Path of the file.
+        file: String,
+        /// The absent column names.
+        columns: Vec<String>,
+    },
+    /// A column name appears twice in the header.
+    #[error("column `{column}` appears twice in the header of `{file}`")]
+    DuplicateColumn {
+        /// Path of the file.
+        file: String,
+        /// The repeated name.
+        column: String,
+    },
+    /// A row has a different number of fields than the header.
+    #[error("row {row} of `{file}` has {found} field(s), the header has {expected}")]
+    Ragged {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        row: usize,
+        /// Fields in the header.
+        expected: usize,
+        /// Fields in this row.
+        found: usize,
+    },
+    /// A field is not a number.
+    #[error("row {row}, column `{column}` of `{file}`: `{text}` is not a number")]
+    NotANumber {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        row: usize,
+        /// Column name.
+        column: String,
+        /// The offending text.
+        text: String,
+    },
+    /// A field is NaN or infinite.
+    #[error("row {row}, column `{column}` of `{file}` is not finite (`{text}`)")]
+    NonFinite {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        row: usize,
+        /// Column name.
+        column: String,
+        /// The offending text.
+        text: String,
+    },
+    /// Time does not strictly increase.
+    #[error("row {row}, column `t` of `{file}`: time {t_s} s does not exceed the previous {previous_s} s")]
+    TimeNotIncreasing {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        row: usize,
+        /// This row's time [s].
+        t_s: f64,
+        /// Previous row's time [s].
+        previous_s: f64,
+    },
+    /// A quaternion is (nearly) zero and cannot be normalised.
+    #[error("row {row} of `{file}`: quaternion (`qw`, `qx`, `qy`, `qz`) has zero norm")]
+    ZeroQuaternion {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        row: usize,
+    },
+    /// Fewer samples than required.
+    #[error("demonstration `{file}` has {found} sample(s), at least {required} are needed")]
+    TooFewSamples {
+        /// Path of the file.
+        file: String,
+        /// Samples present.
+        found: usize,
+        /// Samples required.
+        required: usize,
+    },
+    /// A preprocessing parameter is out of range.
+    #[error("invalid `{name}` = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// Why it is rejected.
+        reason: String,
+    },
+    /// Filtering needs evenly spaced samples.
+    #[error("demonstration `{file}` is irregularly sampled (period {min_dt_s:.3e}..{max_dt_s:.3e} s): resample it before filtering")]
+    IrregularSampling {
+        /// Path of the file.
+        file: String,
+        /// Smallest period [s].
+        min_dt_s: f64,
+        /// Largest period [s].
+        max_dt_s: f64,
+    },
+}
+
+fn list_columns(columns: &[String]) -> String {
+    columns
+        .iter()
+        .map(|c| format!("`{c}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

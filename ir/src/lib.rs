@@ -1,1 +1,765 @@
-//! The serde state-machine IR shared by the compiler and the runtime.
+//! The serde state-machine IR: the one contract between the skillc compiler and its runtime.
+//!
+//! A [`Program`] is what `skillc compile` writes: every skill a `.skill` file defines or
+//! imports, lowered to a flat arena of states and transitions with index ids, each with
+//! its learning plan, plus the file's tasks. The runtime never re-parses source: it reads
+//! this, and the [`SourceSpan`]s let it point runtime messages back at the `.skill` text.
+//!
+//! Conventions used by every field:
+//! - Quantities are SI: metres, seconds, newtons, newton-metres, radians; the unit is in
+//!   the field name (`_m`, `_s`, `_n`, `_mps`, `_hz`) or its doc.
+//! - Axes are ordered `x y z rx ry rz`: translations then rotations about the frame's axes.
+//! - Forces are the force the ROBOT applies to the environment (the negative of what the
+//!   wrist sensor measures, which is the force the environment exerts on the tool), so a
+//!   positive force along a contact frame's z presses into the surface.
+//! - Segments are 0-based here (`segment 1` in source is `SegmentIdx(0)`).
+
+#![warn(missing_docs)]
+
+use serde::{Deserialize, Serialize};
+
+/// The IR format version. Bump on every change to the serialized form.
+pub const IR_VERSION: u32 = 1;
+
+/// A compiled `.skill` file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Program {
+    /// Always [`IR_VERSION`] when written by this compiler.
+    pub ir_version: u32,
+    /// The file that was compiled, as named on the command line.
+    pub source: String,
+    /// Every skill defined in the file or in the files it imports, in import order.
+    pub skills: Vec<Skill>,
+    /// The file's tasks.
+    pub tasks: Vec<Task>,
+}
+
+impl Program {
+    /// The skill with this name.
+    pub fn skill(&self, name: &str) -> Option<&Skill> {
+        self.skills.iter().find(|skill| skill.name == name)
+    }
+
+    /// The task with this name.
+    pub fn task(&self, name: &str) -> Option<&Task> {
+        self.tasks.iter().find(|task| task.name == name)
+    }
+}
+
+/// Where something was written, for messages that point at the `.skill` text.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SourceSpan {
+    /// The file, as named on the command line or as resolved from an import.
+    pub file: String,
+    /// 1-based line of the first character.
+    pub line: u32,
+    /// 1-based column (in characters) of the first character.
+    pub column: u32,
+    /// Byte offset of the first character.
+    pub start: u32,
+    /// Byte offset one past the last character.
+    pub end: u32,
+}
+
+macro_rules! id {
+    ($(#[doc = $doc:literal])* $name:ident) => {
+        $(#[doc = $doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+        #[serde(transparent)]
+        pub struct $name(pub u32);
+
+        impl $name {
+            /// The index into its arena.
+            pub fn index(self) -> usize {
+                self.0 as usize
+            }
+        }
+    };
+}
+
+id!(
+    /// Index into [`Skill::states`].
+    StateId
+);
+id!(
+    /// Index into [`Skill::transitions`].
+    TransitionId
+);
+id!(
+    /// Index into [`LearnPlan::frames`].
+    FrameId
+);
+id!(
+    /// Index into [`LearnPlan::motions`].
+    MotionId
+);
+id!(
+    /// Index into [`LearnPlan::forces`].
+    ForceId
+);
+id!(
+    /// Index into [`LearnPlan::thresholds`].
+    ThresholdId
+);
+id!(
+    /// A 0-based segment of the demonstration, in time order.
+    SegmentIdx
+);
+
+/// One skill template, lowered.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Skill {
+    /// The skill's name.
+    pub name: String,
+    /// Its doc comment, lines joined with `\n` (empty when none).
+    pub doc: String,
+    /// What to learn from the demonstration.
+    pub learn: LearnPlan,
+    /// The state the skill starts in (the first declared state).
+    pub initial: StateId,
+    /// All states; `states[id.0]` has id `id`.
+    pub states: Vec<State>,
+    /// All transitions; `transitions[id.0]` has id `id`.
+    pub transitions: Vec<Transition>,
+    /// Where the skill is written.
+    pub span: SourceSpan,
+}
+
+/// The learning plan: how to segment the demonstration and which features to extract.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LearnPlan {
+    /// How to cut the demonstration into segments.
+    pub segmentation: Segmentation,
+    /// The number of segments the skill needs; learning fails when it finds another count.
+    pub segments: u32,
+    /// Low-pass cut-off applied to the demonstration before learning [Hz], if any.
+    pub lowpass_hz: Option<f64>,
+    /// Resampling rate applied before learning [Hz], if any.
+    pub resample_hz: Option<f64>,
+    /// Compliant frames to learn.
+    pub frames: Vec<FrameDecl>,
+    /// Motions (position + orientation DMPs) to learn.
+    pub motions: Vec<MotionDecl>,
+    /// Desired forces to learn.
+    pub forces: Vec<ForceDecl>,
+    /// Scalar thresholds to learn.
+    pub thresholds: Vec<ThresholdDecl>,
+}
+
+/// How the demonstration is cut into segments.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum Segmentation {
+    /// The whole demonstration is one segment.
+    None,
+    /// Two segments split at the sample of largest force magnitude (touch).
+    MaxForce,
+    /// Agglomerative clustering over standardised position and force features.
+    Cluster {
+        /// The linkage criterion.
+        linkage: Linkage,
+        /// How time keeps clusters contiguous.
+        temporal: Temporal,
+        /// Where the dendrogram is cut.
+        cut: Cut,
+        /// Segments shorter than this are merged into a neighbour [s].
+        min_length_s: f64,
+    },
+    /// Change-point detection in the style of CHAMP (Niekum et al. 2015).
+    Changepoint {
+        /// Minimum segment length [s].
+        min_length_s: f64,
+        /// Candidate models for a segment.
+        models: Vec<SegmentModel>,
+        /// Bound on the particle set.
+        max_particles: u32,
+    },
+}
+
+/// Agglomerative linkage criterion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Linkage {
+    /// Minimum increase of within-cluster variance.
+    Ward,
+    /// Maximum pairwise distance.
+    Complete,
+    /// Mean pairwise distance.
+    Average,
+    /// Minimum pairwise distance.
+    Single,
+}
+
+/// The temporal constraint of clustering.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Temporal {
+    /// Standardised time added as a feature, scaled by `weight`.
+    TimeFeature {
+        /// Weight of the time feature relative to the others.
+        weight: f64,
+    },
+    /// Only clusters within `k` samples of each other in time may merge.
+    Connectivity {
+        /// Neighbourhood size in samples.
+        k: u32,
+    },
+}
+
+/// Where to cut the cluster dendrogram.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "value", rename_all = "snake_case")]
+pub enum Cut {
+    /// Stop at this many clusters.
+    Count(u32),
+    /// Stop merging at this linkage distance (standardised units).
+    Distance(f64),
+}
+
+/// A candidate model for one change-point segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentModel {
+    /// Constant mean with Gaussian noise.
+    Constant,
+    /// Linear in time with Gaussian noise.
+    Linear,
+}
+
+/// A named compliant frame to learn.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameDecl {
+    /// Its name.
+    pub name: String,
+    /// How it is obtained.
+    pub source: FrameSource,
+    /// Where it is declared.
+    pub span: SourceSpan,
+}
+
+/// The six geometric constraint models (Subramani et al. 2018).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConstraintModel {
+    /// The tool point stays at one point; frame at the point, z along the mean applied force.
+    FixedPoint,
+    /// The tool point moves on a plane while the orientation may rotate about the contact.
+    PointOnPlane,
+    /// The tool slides on a plane with fixed orientation; z is the normal, into the surface.
+    Planar,
+    /// The tool moves on a cylinder; z points into the surface at the segment's centre, y along the axis.
+    ConcentricCylinder,
+    /// Motion along a line; x along the line.
+    Prismatic,
+    /// Rotation about a fixed axis (a hinge); z along the axis.
+    AxialRotation,
+}
+
+/// A point in the demonstration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "at", content = "segment", rename_all = "snake_case")]
+pub enum Point {
+    /// The first sample of a segment.
+    Start(SegmentIdx),
+    /// The last sample of a segment (for `max_force`, the end of segment 0 is the force peak).
+    End(SegmentIdx),
+    /// The sample of largest force magnitude.
+    PeakForce,
+}
+
+/// How a frame is obtained.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum FrameSource {
+    /// Fit constraint models on a segment and keep the best scoring of `candidates`.
+    Constraint {
+        /// The segment fitted.
+        segment: SegmentIdx,
+        /// The models tried; one model means that model is imposed.
+        candidates: Vec<ConstraintModel>,
+    },
+    /// z along the applied force at every sample of a segment (a moving frame).
+    ForceAlignedSamples {
+        /// The segment.
+        segment: SegmentIdx,
+    },
+    /// z along the applied force at one point; origin at the tool position there.
+    ForceAlignedAt {
+        /// The point.
+        point: Point,
+    },
+    /// A literal frame in the robot base frame.
+    Fixed {
+        /// Origin [m], base frame.
+        origin_m: [f64; 3],
+        /// Orientation as a unit quaternion `[w, x, y, z]`, base frame.
+        quaternion_wxyz: [f64; 4],
+    },
+}
+
+/// A named motion: a position DMP and a quaternion DMP of one segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MotionDecl {
+    /// Its name.
+    pub name: String,
+    /// The segment learned.
+    pub segment: SegmentIdx,
+    /// Gaussian basis functions per channel.
+    pub basis: u32,
+    /// Where it is declared.
+    pub span: SourceSpan,
+}
+
+/// A named desired force.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ForceDecl {
+    /// Its name.
+    pub name: String,
+    /// How it is obtained.
+    pub source: ForceSource,
+    /// Where it is declared.
+    pub span: SourceSpan,
+}
+
+/// A reference to a frame: a learned one or a built-in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "id", rename_all = "snake_case")]
+pub enum FrameRef {
+    /// The robot base frame.
+    Base,
+    /// The tool frame, moving with the tool.
+    Tool,
+    /// A learned frame.
+    Learned(FrameId),
+}
+
+/// A frame axis, `x y z rx ry rz` as 0..6.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    /// Translation along x.
+    X,
+    /// Translation along y.
+    Y,
+    /// Translation along z.
+    Z,
+    /// Rotation about x.
+    Rx,
+    /// Rotation about y.
+    Ry,
+    /// Rotation about z.
+    Rz,
+}
+
+impl Axis {
+    /// All axes in order.
+    pub const ALL: [Axis; 6] = [Axis::X, Axis::Y, Axis::Z, Axis::Rx, Axis::Ry, Axis::Rz];
+
+    /// The axis from its source name.
+    pub fn from_name(name: &str) -> Option<Axis> {
+        Axis::ALL.into_iter().find(|axis| axis.name() == name)
+    }
+
+    /// The source name: `x`, `rz`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            Axis::X => "x",
+            Axis::Y => "y",
+            Axis::Z => "z",
+            Axis::Rx => "rx",
+            Axis::Ry => "ry",
+            Axis::Rz => "rz",
+        }
+    }
+
+    /// 0..6 in `x y z rx ry rz` order.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Whether it is a rotation.
+    pub fn is_rotation(self) -> bool {
+        self.index() >= 3
+    }
+}
+
+/// A frame axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameAxis {
+    /// The frame.
+    pub frame: FrameRef,
+    /// The axis.
+    pub axis: Axis,
+}
+
+/// How a desired force is obtained.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ForceSource {
+    /// Constant: the mean applied force along `along` over the lowest-variance in-contact
+    /// region of a segment (thesis 4.2.2, slide).
+    Constant {
+        /// The segment.
+        segment: SegmentIdx,
+        /// The direction measured.
+        along: FrameAxis,
+    },
+    /// The applied force along `along` at one point (touch).
+    At {
+        /// The point.
+        point: Point,
+        /// The direction measured.
+        along: FrameAxis,
+    },
+    /// DMPs of the applied force vector of a segment, in the base frame (press).
+    Dmp {
+        /// The segment.
+        segment: SegmentIdx,
+        /// Basis functions per channel.
+        basis: u32,
+    },
+    /// The magnitude of the applied force along a (usually moving) frame's axis over a
+    /// segment, learned as a 1-D DMP (contour).
+    Magnitude {
+        /// The segment.
+        segment: SegmentIdx,
+        /// The direction measured.
+        along: FrameAxis,
+        /// Basis functions.
+        basis: u32,
+    },
+    /// A literal force [N] along the z axis of the state's control frame.
+    Literal {
+        /// The force [N].
+        value_n: f64,
+    },
+    /// No desired force: force-controlled axes regulate to zero (pure compliance) and the
+    /// force is only watched by guards.
+    Tracked,
+}
+
+/// A named scalar threshold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ThresholdDecl {
+    /// Its name.
+    pub name: String,
+    /// How it is obtained.
+    pub source: ThresholdSource,
+    /// Where it is declared.
+    pub span: SourceSpan,
+}
+
+/// How a threshold is obtained.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ThresholdSource {
+    /// `scale` times the applied force along `along` at `point` [N].
+    ForceAt {
+        /// The point.
+        point: Point,
+        /// The direction measured.
+        along: FrameAxis,
+        /// Multiplier on the learned value.
+        scale: f64,
+    },
+    /// A literal value [N or Nm].
+    Literal {
+        /// The value in SI units.
+        value: f64,
+    },
+}
+
+/// One state of the machine.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    /// Its id (its index in [`Skill::states`]).
+    pub id: StateId,
+    /// Its name.
+    pub name: String,
+    /// Its doc comment (empty when none).
+    pub doc: String,
+    /// What it does.
+    pub kind: StateKind,
+    /// Where it is written.
+    pub span: SourceSpan,
+}
+
+/// Active states control the robot; terminal states end the skill.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum StateKind {
+    /// A state that commands the robot.
+    Active(Box<ActiveState>),
+    /// The skill ends here.
+    Terminal {
+        /// Success or failure.
+        outcome: Outcome,
+        /// A message for the user, if written.
+        message: Option<String>,
+    },
+}
+
+/// How a skill ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// The skill did what it was for.
+    Success,
+    /// It did not.
+    Failure,
+}
+
+/// What an active state commands.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ActiveState {
+    /// The motion run in this state, started from the pose at entry; `None` holds the entry pose.
+    pub motion: Option<MotionId>,
+    /// The compliant frame in which selection and stiffness are given.
+    pub frame: FrameRef,
+    /// Per axis (`x y z rx ry rz` of `frame`): position (`true`, S = 1) or force control.
+    pub position_controlled: [bool; 6],
+    /// Stiffness per axis in `frame`: N/m for x y z, Nm/rad for rx ry rz.
+    pub stiffness: [f64; 6],
+    /// The desired force for the force-controlled axes, if any.
+    pub force: Option<ForceId>,
+    /// The PI force controller's gains.
+    pub gains: ForceGains,
+    /// Actions run once when the state is entered, in order.
+    pub entry: Vec<EntryAction>,
+    /// Outgoing transitions in priority order: the first whose guard holds fires.
+    pub transitions: Vec<TransitionId>,
+}
+
+/// Gains of the PI force controller on the force-controlled axes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ForceGains {
+    /// Proportional gain on the force error [dimensionless: N of command per N of error].
+    pub kp: f64,
+    /// Integral gain [1/s].
+    pub ki: f64,
+    /// Clamp on each component of the integral term [N]; `None` leaves it unbounded.
+    pub integral_limit_n: Option<f64>,
+}
+
+/// An action run when a state is entered.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "action", rename_all = "snake_case")]
+pub enum EntryAction {
+    /// Zero the force controller's integral.
+    ResetIntegral,
+    /// Take the current sensor reading as the zero of the force sensor.
+    Tare,
+    /// Move the state's motion goal by `distance_m` along an axis.
+    ShiftGoal {
+        /// The direction.
+        along: FrameAxis,
+        /// The distance [m] (negative moves against the axis).
+        distance_m: f64,
+    },
+}
+
+/// A transition of the machine.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Transition {
+    /// Its id.
+    pub id: TransitionId,
+    /// The state it leaves.
+    pub from: StateId,
+    /// When it fires.
+    pub guard: Guard,
+    /// What it does.
+    pub action: TransitionAction,
+    /// The guard as written, for messages and graphs.
+    pub guard_text: String,
+    /// Where it is written.
+    pub span: SourceSpan,
+}
+
+/// What a transition does when its guard holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum TransitionAction {
+    /// Enter another state (or re-enter this one), running its entry actions.
+    Goto {
+        /// The target.
+        target: StateId,
+    },
+    /// The touch/press adaptation (thesis Fig. 4.16, case II): stay in the state and move the
+    /// motion goal along `along` at `speed_mps`, up to `max_m` in total; when the bound is
+    /// reached and the guard holds again, enter `then`.
+    Extend {
+        /// The direction.
+        along: FrameAxis,
+        /// Speed of the goal [m/s].
+        speed_mps: f64,
+        /// Total extension bound [m].
+        max_m: f64,
+        /// The state entered when the bound is exhausted.
+        then: StateId,
+    },
+}
+
+/// A guard expression.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Guard {
+    /// All of them hold.
+    And {
+        /// The operands.
+        all: Vec<Guard>,
+    },
+    /// Any of them holds.
+    Or {
+        /// The operands.
+        any: Vec<Guard>,
+    },
+    /// It does not hold.
+    Not {
+        /// The operand.
+        guard: Box<Guard>,
+    },
+    /// The applied force (N, translation axes) or torque (Nm, rotation axes) along a frame
+    /// axis compared with a threshold.
+    Force {
+        /// The axis measured.
+        along: FrameAxis,
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side.
+        rhs: Threshold,
+    },
+    /// Every DMP the state runs (motion and force profile) has finished, including any extension.
+    MotionDone,
+    /// Every force-controlled axis is within `tolerance_n` of its desired force.
+    ForceReached {
+        /// Tolerance [N].
+        tolerance_n: f64,
+    },
+    /// At least `duration_s` has passed since the state was entered.
+    Dwell {
+        /// Duration [s].
+        duration_s: f64,
+    },
+    /// Like `Dwell`, but reported as a timeout when it fires.
+    Timeout {
+        /// Duration [s].
+        duration_s: f64,
+    },
+}
+
+/// A comparison operator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Comparison {
+    /// `>=`
+    Ge,
+    /// `>`
+    Gt,
+    /// `<=`
+    Le,
+    /// `<`
+    Lt,
+}
+
+impl Comparison {
+    /// Evaluates `lhs OP rhs`.
+    pub fn holds(self, lhs: f64, rhs: f64) -> bool {
+        match self {
+            Comparison::Ge => lhs >= rhs,
+            Comparison::Gt => lhs > rhs,
+            Comparison::Le => lhs <= rhs,
+            Comparison::Lt => lhs < rhs,
+        }
+    }
+}
+
+/// The right-hand side of a force comparison.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Threshold {
+    /// A learned threshold.
+    Learned {
+        /// The threshold.
+        id: ThresholdId,
+    },
+    /// A learned constant force, used as a threshold.
+    Force {
+        /// The force.
+        id: ForceId,
+    },
+    /// A literal [N or Nm].
+    Literal {
+        /// The value.
+        value: f64,
+    },
+}
+
+/// A task: skill invocations run in sequence, each starting where the last ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Task {
+    /// Its name.
+    pub name: String,
+    /// Its doc comment.
+    pub doc: String,
+    /// The steps, in order.
+    pub steps: Vec<Step>,
+    /// Steps that run only when a failing step names them.
+    pub fallbacks: Vec<Step>,
+    /// Where it is written.
+    pub span: SourceSpan,
+}
+
+/// One skill invocation in a task.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Step {
+    /// The step's name.
+    pub name: String,
+    /// The skill run, by name (a key into [`Program::skills`]).
+    pub skill: String,
+    /// Where its features come from.
+    pub input: StepInput,
+    /// Adjustments to the learned skill.
+    pub overrides: Overrides,
+    /// What happens when it fails.
+    pub on_failure: OnFailure,
+    /// Where it is written.
+    pub span: SourceSpan,
+}
+
+/// Where a step's learned features come from. Paths are resolved against the directory of
+/// the file that declares the task.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "path", rename_all = "snake_case")]
+pub enum StepInput {
+    /// Learn from this demonstration CSV first.
+    Demo(String),
+    /// Use this learned file.
+    Learned(String),
+}
+
+/// Adjustments applied to a learned skill when a task runs it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Overrides {
+    /// Multiplier on every desired force and force threshold.
+    pub force_scale: f64,
+    /// Multiplier on motion speed (2 runs twice as fast).
+    pub speed_factor: f64,
+    /// Offset added to every motion goal [m], base frame.
+    pub goal_offset_m: [f64; 3],
+}
+
+impl Default for Overrides {
+    fn default() -> Self {
+        Overrides { force_scale: 1.0, speed_factor: 1.0, goal_offset_m: [0.0; 3] }
+    }
+}
+
+/// A task's failure policy for one step.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "policy", content = "fallback", rename_all = "snake_case")]
+pub enum OnFailure {
+    /// Stop the task; it fails.
+    Abort,
+    /// Run this fallback (an index into [`Task::fallbacks`]), then stop; the task fails.
+    Fallback(u32),
+}

@@ -1,0 +1,567 @@
+//! Parsing: source text to the spanned [`ast`](crate::ast), through pest.
+//!
+//! pest cannot recover after an error, so a file with a syntax error yields one
+//! diagnostic and an empty tree. Input that would make pest recurse or run long
+//! (deep nesting, huge files) is refused before pest sees it.
+
+use crate::ast::*;
+use crate::diag::{Code, Diag};
+use crate::source::{SourceFile, Span};
+use pest::error::InputLocation;
+use pest::iterators::Pair;
+use pest::Parser;
+use skill_grammar::{Rule, SkillParser};
+
+/// Parses one file. Never panics; bad input gives diagnostics and an empty file.
+pub fn parse(src: &SourceFile, file: usize) -> (File, Vec<Diag>) {
+    if src.text.len() > crate::MAX_SOURCE_BYTES {
+        let diag = Diag::new(
+            Code::FileTooLarge,
+            file,
+            Span::new(0, 0),
+            format!("file is {} bytes, more than a skill template can be", src.text.len()),
+            "this file",
+        )
+        .help(format!(
+            "templates are small; check that this is the right file or split it below {} bytes",
+            crate::MAX_SOURCE_BYTES
+        ));
+        return (File::default(), vec![diag]);
+    }
+    if let Some(diag) = check_nesting(src, file) {
+        return (File::default(), vec![diag]);
+    }
+    match SkillParser::parse(Rule::file, &src.text) {
+        Ok(mut pairs) => {
+            let root = pairs.next().expect("grammar: `file` yields one pair");
+            (file_rule(root), Vec::new())
+        }
+        Err(err) => (File::default(), vec![syntax_error(err, file)]),
+    }
+}
+
+/// Refuses nesting deeper than [`crate::MAX_NESTING`] so pest's recursion stays bounded.
+fn check_nesting(src: &SourceFile, file: usize) -> Option<Diag> {
+    let mut depth = 0usize;
+    let mut in_comment = false;
+    let mut in_string = false;
+    let bytes = src.text.as_bytes();
+    for (at, &byte) in bytes.iter().enumerate() {
+        match byte {
+            b'\n' => {
+                in_comment = false;
+                in_string = false;
+            }
+            _ if in_comment => {}
+            b'"' => in_string = !in_string,
+            _ if in_string => {}
+            b'/' if bytes.get(at + 1) == Some(&b'/') => in_comment = true,
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                if depth > crate::MAX_NESTING {
+                    return Some(
+                        Diag::new(
+                            Code::TooDeep,
+                            file,
+                            Span::new(at, at + 1),
+                            format!("brackets nested more than {} deep", crate::MAX_NESTING),
+                            "nesting exceeds the limit here",
+                        )
+                        .help("no template needs this depth; look for unbalanced brackets"),
+                    );
+                }
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    None
+}
+
+fn syntax_error(err: pest::error::Error<Rule>, file: usize) -> Diag {
+    let span = match err.location {
+        InputLocation::Pos(at) => Span::new(at, at),
+        InputLocation::Span((start, end)) => Span::new(start, end),
+    };
+    let (message, label) = match &err.variant {
+        pest::error::ErrorVariant::ParsingError { positives, negatives } => {
+            let mut expected: Vec<&str> = positives.iter().filter_map(|rule| rule_label(*rule)).collect();
+            expected.sort_unstable();
+            expected.dedup();
+            let unexpected: Vec<&str> = negatives.iter().filter_map(|rule| rule_label(*rule)).collect();
+            let label = if expected.is_empty() {
+                "unexpected here".to_string()
+            } else {
+                format!("expected {}", join_or(&expected))
+            };
+            let message = if !unexpected.is_empty() {
+                format!("unexpected {}", join_or(&unexpected))
+            } else {
+                format!("syntax error: {label}")
+            };
+            (message, label)
+        }
+        pest::error::ErrorVariant::CustomError { message } => (message.clone(), String::new()),
+    };
+    Diag::new(Code::Unexpected, file, span, message, label)
+}
+
+fn join_or(items: &[&str]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => (*one).to_string(),
+        [init @ .., last] => format!("{} or {}", init.join(", "), last),
+    }
+}
+
+/// What a rule means to a user, for "expected ..." messages.
+fn rule_label(rule: Rule) -> Option<&'static str> {
+    Some(match rule {
+        Rule::EOI => "end of file",
+        Rule::import => "`import`",
+        Rule::skill => "`skill`",
+        Rule::task => "`task`",
+        Rule::doc => "a doc comment",
+        Rule::learn => "`learn`",
+        Rule::learn_entry | Rule::segments_decl | Rule::frame_decl | Rule::motion_decl => {
+            "a learn declaration (`segments`, `frame`, `motion`, `force`, `threshold`)"
+        }
+        Rule::force_decl | Rule::threshold_decl | Rule::preprocess_decl | Rule::preprocess_kw => {
+            "a learn declaration (`segments`, `frame`, `motion`, `force`, `threshold`)"
+        }
+        Rule::expect_clause => "`expect`",
+        Rule::state => "`state`",
+        Rule::terminal => "`terminal`",
+        Rule::state_entry | Rule::move_stmt | Rule::control_stmt | Rule::stiffness_stmt | Rule::apply_stmt => {
+            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `on`)"
+        }
+        Rule::gains_stmt | Rule::entry_stmt | Rule::transition => {
+            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `on`)"
+        }
+        Rule::from_current => "`from current`",
+        Rule::control_group | Rule::control_mode => "`position` or `force`",
+        Rule::axis_set | Rule::all_axes => "axes (`x y z rx ry rz` or `all`)",
+        Rule::axis_value => "axes followed by `:`",
+        Rule::extend => "`extend`",
+        Rule::guard | Rule::guard_and | Rule::guard_not | Rule::not_kw | Rule::named_guard => "a guard",
+        Rule::force_cmp | Rule::timed | Rule::timed_kw | Rule::reached => "a guard",
+        Rule::cmp_op => "a comparison (`>=`, `>`, `<=`, `<`)",
+        Rule::task_entry | Rule::step | Rule::fallback => "`step` or `fallback`",
+        Rule::on_failure => "`on failure`",
+        Rule::abort => "`abort`",
+        Rule::call => "a call",
+        Rule::arg | Rule::key => "an argument",
+        Rule::list => "a list",
+        Rule::segment_ref => "`segment N`",
+        Rule::axis_ref => "a frame axis (`frame.z`)",
+        Rule::quantity | Rule::number => "a number",
+        Rule::unit => "a unit",
+        Rule::integer => "an integer",
+        Rule::string | Rule::string_inner => "a string",
+        Rule::ident => "a name",
+        Rule::keyword => "a keyword",
+        _ => return None,
+    })
+}
+
+fn span_of(pair: &Pair<'_, Rule>) -> Span {
+    let span = pair.as_span();
+    Span::new(span.start(), span.end())
+}
+
+fn file_rule(pair: Pair<'_, Rule>) -> File {
+    let mut out = File::default();
+    for item in pair.into_inner() {
+        match item.as_rule() {
+            Rule::import => out.imports.push(import(item)),
+            Rule::skill => out.skills.push(skill(item)),
+            Rule::task => out.tasks.push(task(item)),
+            Rule::EOI => {}
+            rule => unreachable!("grammar: unexpected {rule:?} in file"),
+        }
+    }
+    out
+}
+
+fn import(pair: Pair<'_, Rule>) -> Import {
+    let string_pair = pair.into_inner().next().expect("grammar: import has a string");
+    Import { span: span_of(&string_pair), path: string(string_pair) }
+}
+
+fn ident(pair: Pair<'_, Rule>) -> Ident {
+    Ident { name: pair.as_str().to_string(), span: span_of(&pair) }
+}
+
+fn doc_text(pair: Pair<'_, Rule>) -> String {
+    let text = pair.as_str().trim_start_matches("///");
+    text.strip_prefix(' ').unwrap_or(text).trim_end().to_string()
+}
+
+fn skill(pair: Pair<'_, Rule>) -> Skill {
+    let span = span_of(&pair);
+    let mut doc = Vec::new();
+    let mut name = None;
+    let mut learn = Vec::new();
+    let mut states = Vec::new();
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            Rule::ident => name = Some(ident(inner)),
+            Rule::learn => learn.extend(inner.into_inner().map(learn_entry)),
+            Rule::state => states.push(state(inner)),
+            Rule::terminal => states.push(terminal(inner)),
+            rule => unreachable!("grammar: unexpected {rule:?} in skill"),
+        }
+    }
+    Skill { doc, name: name.expect("grammar: skill has a name"), learn, states, span }
+}
+
+fn learn_entry(pair: Pair<'_, Rule>) -> LearnDecl {
+    let mut doc = Vec::new();
+    let mut decl = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            _ => decl = Some(inner),
+        }
+    }
+    let decl = decl.expect("grammar: learn entry has a declaration");
+    let span = span_of(&decl);
+    let rule = decl.as_rule();
+    let mut inner = decl.into_inner();
+    let kind = match rule {
+        Rule::segments_decl => LearnKind::Segments,
+        Rule::frame_decl => LearnKind::Frame,
+        Rule::motion_decl => LearnKind::Motion,
+        Rule::force_decl => LearnKind::Force,
+        Rule::threshold_decl => LearnKind::Threshold,
+        Rule::preprocess_decl => {
+            let keyword = inner.next().expect("grammar: preprocess keyword");
+            if keyword.as_str() == "lowpass" {
+                LearnKind::Lowpass
+            } else {
+                LearnKind::Resample
+            }
+        }
+        rule => unreachable!("grammar: unexpected {rule:?} in learn"),
+    };
+    let mut name = None;
+    let mut value = None;
+    let mut expect = None;
+    for part in inner {
+        match part.as_rule() {
+            Rule::ident if name.is_none() && value.is_none() && !matches!(kind, LearnKind::Segments) => {
+                name = Some(ident(part))
+            }
+            Rule::expect_clause => {
+                let integer = part.into_inner().next().expect("grammar: expect has an integer");
+                expect = Some((parse_integer(integer.as_str()), span_of(&integer)));
+            }
+            _ => value = Some(expr(part)),
+        }
+    }
+    LearnDecl { doc, kind, name, value: value.expect("grammar: learn declaration has a value"), expect, span }
+}
+
+fn parse_integer(text: &str) -> u64 {
+    // The grammar admits only digits; an absurdly long integer saturates and is range-checked later.
+    text.parse().unwrap_or(u64::MAX)
+}
+
+fn state(pair: Pair<'_, Rule>) -> State {
+    let span = span_of(&pair);
+    let mut doc = Vec::new();
+    let mut name = None;
+    let mut body = Vec::new();
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            Rule::ident => name = Some(ident(inner)),
+            Rule::state_entry => body.push(stmt(inner)),
+            rule => unreachable!("grammar: unexpected {rule:?} in state"),
+        }
+    }
+    State { doc, name: name.expect("grammar: state has a name"), body: StateBody::Active(body), span }
+}
+
+fn terminal(pair: Pair<'_, Rule>) -> State {
+    let span = span_of(&pair);
+    let mut doc = Vec::new();
+    let mut idents = Vec::new();
+    let mut message = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            Rule::ident => idents.push(ident(inner)),
+            Rule::string => message = Some(string(inner)),
+            rule => unreachable!("grammar: unexpected {rule:?} in terminal"),
+        }
+    }
+    let mut idents = idents.into_iter();
+    let name = idents.next().expect("grammar: terminal has a name");
+    let outcome = idents.next().expect("grammar: terminal has an outcome");
+    State { doc, name, body: StateBody::Terminal { outcome, message }, span }
+}
+
+fn stmt(pair: Pair<'_, Rule>) -> Stmt {
+    let mut doc = Vec::new();
+    let mut stmt_pair = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            _ => stmt_pair = Some(inner),
+        }
+    }
+    let pair = stmt_pair.expect("grammar: state entry has a statement");
+    let span = span_of(&pair);
+    let rule = pair.as_rule();
+    let mut inner = pair.into_inner();
+    let kind = match rule {
+        Rule::move_stmt => {
+            let motion = ident(inner.next().expect("grammar: move names a motion"));
+            StmtKind::Move { motion, from_current: inner.next().is_some() }
+        }
+        Rule::control_stmt => {
+            let mut groups = Vec::new();
+            let mut frame = None;
+            for part in inner {
+                match part.as_rule() {
+                    Rule::control_group => groups.push(control_group(part)),
+                    Rule::ident => frame = Some(ident(part)),
+                    rule => unreachable!("grammar: unexpected {rule:?} in control"),
+                }
+            }
+            StmtKind::Control { groups, frame }
+        }
+        Rule::stiffness_stmt => StmtKind::Stiffness(inner.map(axis_value).collect()),
+        Rule::apply_stmt => StmtKind::Apply(ident(inner.next().expect("grammar: apply names a force"))),
+        Rule::gains_stmt => StmtKind::Gains(inner.map(arg).collect()),
+        Rule::entry_stmt => StmtKind::Entry(inner.map(expr).collect()),
+        Rule::transition => {
+            let guard_pair = inner.next().expect("grammar: transition has a guard");
+            let target_pair = inner.next().expect("grammar: transition has a target");
+            StmtKind::Transition { guard: guard(guard_pair), target: target(target_pair) }
+        }
+        rule => unreachable!("grammar: unexpected {rule:?} in state"),
+    };
+    Stmt { doc, kind, span }
+}
+
+fn control_group(pair: Pair<'_, Rule>) -> ControlGroup {
+    let mut inner = pair.into_inner();
+    let mode = inner.next().expect("grammar: control group has a mode");
+    let axes = axis_set(inner.next().expect("grammar: control group has axes"));
+    ControlGroup { force: mode.as_str() == "force", mode_span: span_of(&mode), axes }
+}
+
+fn axis_set(pair: Pair<'_, Rule>) -> AxisSet {
+    let span = span_of(&pair);
+    let idents: Vec<Ident> = pair.into_inner().filter(|p| p.as_rule() == Rule::ident).map(ident).collect();
+    if idents.is_empty() {
+        AxisSet::All(span)
+    } else {
+        AxisSet::List(idents)
+    }
+}
+
+fn axis_value(pair: Pair<'_, Rule>) -> AxisValue {
+    let mut inner = pair.into_inner();
+    let axes = axis_set(inner.next().expect("grammar: axis value has axes"));
+    let value = expr(inner.next().expect("grammar: axis value has a value"));
+    AxisValue { axes, value }
+}
+
+fn target(pair: Pair<'_, Rule>) -> Target {
+    match pair.as_rule() {
+        Rule::ident => Target::State(ident(pair)),
+        Rule::extend => {
+            let span = span_of(&pair);
+            let mut inner = pair.into_inner();
+            let axis = axis_ref(inner.next().expect("grammar: extend has an axis"));
+            let speed = expr(inner.next().expect("grammar: extend has a speed"));
+            let max = expr(inner.next().expect("grammar: extend has a bound"));
+            let then = ident(inner.next().expect("grammar: extend has a then state"));
+            Target::Extend { axis, speed, max, then, span }
+        }
+        rule => unreachable!("grammar: unexpected {rule:?} as target"),
+    }
+}
+
+fn guard(pair: Pair<'_, Rule>) -> Guard {
+    let span = span_of(&pair);
+    match pair.as_rule() {
+        Rule::guard | Rule::guard_and => {
+            let is_or = pair.as_rule() == Rule::guard;
+            let mut parts: Vec<Guard> = Vec::new();
+            for part in pair.into_inner().map(guard) {
+                // `(a and b) and c` is `a and b and c`: flatten so that the formatter's
+                // output, which drops redundant parentheses, parses back to the same tree.
+                match part.kind {
+                    GuardKind::Or(inner) if is_or => parts.extend(inner),
+                    GuardKind::And(inner) if !is_or => parts.extend(inner),
+                    kind => parts.push(Guard { kind, span: part.span }),
+                }
+            }
+            if parts.len() == 1 {
+                return parts.pop().expect("one part");
+            }
+            Guard { kind: if is_or { GuardKind::Or(parts) } else { GuardKind::And(parts) }, span }
+        }
+        Rule::guard_not => {
+            let mut inner = pair.into_inner();
+            let first = inner.next().expect("grammar: guard_not is not empty");
+            if first.as_rule() == Rule::not_kw {
+                let negated = guard(inner.next().expect("grammar: not has an operand"));
+                Guard { kind: GuardKind::Not(Box::new(negated)), span }
+            } else {
+                guard(first)
+            }
+        }
+        Rule::force_cmp => {
+            let mut inner = pair.into_inner();
+            let axis = axis_ref(inner.next().expect("grammar: force() has an axis"));
+            let op = match inner.next().expect("grammar: comparison operator").as_str() {
+                ">=" => CmpOp::Ge,
+                ">" => CmpOp::Gt,
+                "<=" => CmpOp::Le,
+                _ => CmpOp::Lt,
+            };
+            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            Guard { kind: GuardKind::Force { axis, op, rhs }, span }
+        }
+        Rule::timed => {
+            let mut inner = pair.into_inner();
+            let timeout = inner.next().expect("grammar: timed keyword").as_str() == "timeout";
+            let duration = expr(inner.next().expect("grammar: timed has a duration"));
+            Guard { kind: GuardKind::Timed { timeout, duration }, span }
+        }
+        Rule::reached => {
+            let tolerance = expr(pair.into_inner().next().expect("grammar: force_reached has a tolerance"));
+            Guard { kind: GuardKind::ForceReached(tolerance), span }
+        }
+        Rule::named_guard => {
+            let name = ident(pair.into_inner().next().expect("grammar: named guard has a name"));
+            Guard { kind: GuardKind::Named(name), span }
+        }
+        rule => unreachable!("grammar: unexpected {rule:?} in guard"),
+    }
+}
+
+fn task(pair: Pair<'_, Rule>) -> Task {
+    let span = span_of(&pair);
+    let mut doc = Vec::new();
+    let mut name = None;
+    let mut steps = Vec::new();
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            Rule::ident => name = Some(ident(inner)),
+            Rule::task_entry => steps.push(step(inner)),
+            rule => unreachable!("grammar: unexpected {rule:?} in task"),
+        }
+    }
+    Task { doc, name: name.expect("grammar: task has a name"), steps, span }
+}
+
+fn step(pair: Pair<'_, Rule>) -> Step {
+    let mut doc = Vec::new();
+    let mut step_pair = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            _ => step_pair = Some(inner),
+        }
+    }
+    let pair = step_pair.expect("grammar: task entry has a step");
+    let span = span_of(&pair);
+    let fallback = pair.as_rule() == Rule::fallback;
+    let mut inner = pair.into_inner();
+    let name = ident(inner.next().expect("grammar: step has a name"));
+    let call_pair = inner.next().expect("grammar: step has a call");
+    let mut call_inner = call_pair.into_inner();
+    let skill = ident(call_inner.next().expect("grammar: call has a name"));
+    let args = call_inner.map(arg).collect();
+    let on_failure = inner.next().map(|policy| {
+        let part = policy.into_inner().next().expect("grammar: on failure has a policy");
+        match part.as_rule() {
+            Rule::abort => OnFailure::Abort(span_of(&part)),
+            _ => OnFailure::Fallback(ident(part)),
+        }
+    });
+    Step { doc, fallback, name, skill, args, on_failure, span }
+}
+
+fn arg(pair: Pair<'_, Rule>) -> Arg {
+    let span = span_of(&pair);
+    let mut key = None;
+    let mut value = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::key => key = Some(ident(inner)),
+            _ => value = Some(expr(inner)),
+        }
+    }
+    Arg { key, value: value.expect("grammar: argument has a value"), span }
+}
+
+fn axis_ref(pair: Pair<'_, Rule>) -> AxisRef {
+    let span = span_of(&pair);
+    let mut inner = pair.into_inner();
+    let frame = ident(inner.next().expect("grammar: axis ref has a frame"));
+    let axis = ident(inner.next().expect("grammar: axis ref has an axis"));
+    AxisRef { frame, axis, span }
+}
+
+fn number(pair: Pair<'_, Rule>) -> Number {
+    let text = pair.as_str().to_string();
+    // The grammar admits only decimal literals, which always parse (perhaps to infinity, checked later).
+    let value = text.parse().unwrap_or(f64::NAN);
+    Number { text, value }
+}
+
+fn string(pair: Pair<'_, Rule>) -> String {
+    let raw = pair.into_inner().next().map_or("", |inner| inner.as_str());
+    let mut out = String::with_capacity(raw.len());
+    let mut chars = raw.chars();
+    while let Some(c) = chars.next() {
+        if c == '\\' {
+            match chars.next() {
+                Some('n') => out.push('\n'),
+                Some('t') => out.push('\t'),
+                Some(other) => out.push(other),
+                None => {}
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+fn expr(pair: Pair<'_, Rule>) -> Expr {
+    let span = span_of(&pair);
+    let kind = match pair.as_rule() {
+        Rule::quantity => {
+            let mut inner = pair.into_inner();
+            let number_pair = inner.next().expect("grammar: quantity has a number");
+            let unit = ident(inner.next().expect("grammar: quantity has a unit"));
+            ExprKind::Quantity { number: number(number_pair), unit }
+        }
+        Rule::number => ExprKind::Number(number(pair)),
+        Rule::string => ExprKind::Str(string(pair)),
+        Rule::list => ExprKind::List(pair.into_inner().map(expr).collect()),
+        Rule::segment_ref => {
+            let integer = pair.into_inner().next().expect("grammar: segment has an index");
+            ExprKind::Segment(parse_integer(integer.as_str()))
+        }
+        Rule::call => {
+            let mut inner = pair.into_inner();
+            let name = ident(inner.next().expect("grammar: call has a name"));
+            ExprKind::Call { name, args: inner.map(arg).collect() }
+        }
+        Rule::axis_ref => ExprKind::Axis(axis_ref(pair)),
+        Rule::ident => ExprKind::Name(ident(pair)),
+        rule => unreachable!("grammar: unexpected {rule:?} as value"),
+    };
+    Expr { kind, span }
+}

@@ -2,7 +2,7 @@
 //! machine, and builds the IR as it goes. Every problem is reported; nothing stops at the first.
 //!
 //! Resolution and lowering are one walk here: each resolved value already is its IR form,
-//! and the IR is only kept when the walk reported no error, so `lower` stays infallible.
+//! and the IR is only kept when the walk reported no error.
 
 use crate::ast::{self, AxisSet, ExprKind, GuardKind, LearnKind, StmtKind};
 use crate::diag::{did_you_mean, Code, Diag, Severity};
@@ -158,7 +158,7 @@ impl<'a> Checker<'a> {
                             format!("{what} must be {dim}, found {found}"),
                             format!("`{}` is {found}", unit.name),
                         )
-                        .help(format!("use a unit of {dim}: {}", units::units_of(dim).join(", ")));
+                        .help(format!("use a unit for {dim}: {}", units::units_of(dim).join(", ")));
                     self.report(diag);
                     return None;
                 }
@@ -366,7 +366,10 @@ impl<'a> Checker<'a> {
         };
         let learn = self.learn(&skill.learn, &mut scope);
         let (states, transitions, initial) = self.states(skill, &mut scope);
-        self.unused(&scope);
+        if self.error_count() == errors_before {
+            // After an error, a name may look unused only because its use did not resolve.
+            self.unused(&scope);
+        }
         let (learn, initial) = (learn?, initial?);
         if self.error_count() > errors_before {
             return None;
@@ -1357,7 +1360,6 @@ impl<'a> Checker<'a> {
 
         let mut states = Vec::new();
         let mut transitions = Vec::new();
-        let mut ok = true;
         for (index, state) in unique.iter().enumerate() {
             let id = ir::StateId(index as u32);
             let kind = match &state.body {
@@ -1392,11 +1394,31 @@ impl<'a> Checker<'a> {
                     kind,
                     span: self.ir_span(state.name.span),
                 }),
-                None => ok = false,
+                None => {}
             }
         }
-        if ok {
-            self.graph(&unique, &states, &transitions);
+        // The machine's shape comes from the source, so it is analysed even when guards or
+        // statements have errors; only unknown targets make the analysis meaningless.
+        let mut successors: Vec<Vec<usize>> = vec![Vec::new(); unique.len()];
+        let mut targets_known = true;
+        for (index, state) in unique.iter().enumerate() {
+            let ast::StateBody::Active(stmts) = &state.body else { continue };
+            for stmt in stmts {
+                let StmtKind::Transition { target, .. } = &stmt.kind else { continue };
+                let name = match target {
+                    ast::Target::State(name) => name,
+                    ast::Target::Extend { then, .. } => then,
+                };
+                match ids.get(name.name.as_str()) {
+                    Some((target, _)) => successors[index].push(target.index()),
+                    None => targets_known = false,
+                }
+            }
+        }
+        if targets_known {
+            let terminal: Vec<bool> =
+                unique.iter().map(|state| matches!(state.body, ast::StateBody::Terminal { .. })).collect();
+            self.graph(&unique, &successors, &terminal);
         }
         (states, transitions, Some(ir::StateId(0)))
     }
@@ -1934,16 +1956,8 @@ impl<'a> Checker<'a> {
     }
 
     /// Reachability from the initial state, and a path to a terminal from every state.
-    fn graph(&mut self, states: &[&ast::State], ir_states: &[ir::State], transitions: &[ir::Transition]) {
-        let n = ir_states.len();
-        let mut successors: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for transition in transitions {
-            let from = transition.from.index();
-            match &transition.action {
-                ir::TransitionAction::Goto { target } => successors[from].push(target.index()),
-                ir::TransitionAction::Extend { then, .. } => successors[from].push(then.index()),
-            }
-        }
+    fn graph(&mut self, states: &[&ast::State], successors: &[Vec<usize>], terminal: &[bool]) {
+        let n = states.len();
         let mut reached = vec![false; n];
         let mut queue = VecDeque::from([0usize]);
         reached[0] = true;
@@ -1955,7 +1969,7 @@ impl<'a> Checker<'a> {
                 }
             }
         }
-        let is_terminal = |index: usize| matches!(ir_states[index].kind, ir::StateKind::Terminal { .. });
+        let is_terminal = |index: usize| terminal[index];
         let mut reaches_terminal: Vec<bool> = (0..n).map(is_terminal).collect();
         loop {
             let mut changed = false;

@@ -90,10 +90,26 @@ impl Printer<'_> {
         }
     }
 
+    /// The end of the code before `end`, skipping trailing whitespace and line comments.
+    fn code_end(&self, mut end: usize) -> usize {
+        let text = self.src.text.as_bytes();
+        loop {
+            while end > 0 && text[end - 1].is_ascii_whitespace() {
+                end -= 1;
+            }
+            match self.comments.iter().find(|comment| comment.span.end == end) {
+                Some(comment) => end = comment.span.start,
+                None => return end,
+            }
+        }
+    }
+
     /// Keeps one blank line where the source had at least one before `pos`.
     fn keep_blank_line(&mut self, pos: usize) {
         let between = self.src.text.get(self.last_end..pos).unwrap_or("");
-        if between.matches('\n').count() >= 2 && !self.out.is_empty() && !self.out.ends_with("{\n") {
+        let lines: Vec<&str> = between.split('\n').collect();
+        let has_blank_line = lines.len() > 2 && lines[1..lines.len() - 1].iter().any(|line| line.trim().is_empty());
+        if has_blank_line && !self.out.is_empty() && !self.out.ends_with("{\n") {
             self.blank();
         }
     }
@@ -122,6 +138,8 @@ impl Printer<'_> {
 
     /// Marks the node ending at `end` as printed, so comments after it on its line trail it.
     fn finish(&mut self, end: usize) {
+        // pest spans may include the whitespace and comments after the node: step back over them.
+        let end = self.code_end(end);
         self.last_end = end;
         // Comments inside the node (between its start and end) follow it.
         self.flush_comments(end);
@@ -182,8 +200,14 @@ impl Printer<'_> {
             self.indent();
             self.out.push_str("}\n");
         }
+        let mut previous_terminal = false;
         for state in &skill.states {
-            self.blank();
+            let terminal = matches!(state.body, StateBody::Terminal { .. });
+            // Consecutive terminals stay together (unless the source separates them).
+            if !(terminal && previous_terminal) {
+                self.blank();
+            }
+            previous_terminal = terminal;
             self.docs(state.span.start, &state.doc);
             match &state.body {
                 StateBody::Terminal { outcome, message } => {

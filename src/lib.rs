@@ -1,0 +1,10 @@
+//! The `skillc` command-line tool as a library: argument types, file IO, rendering and exit codes.
+//!
+//! `main.rs` only parses arguments and calls [`run`]; tests drive the same functions.
+
+pub mod atomic;
+pub mod cli;
+pub mod frontend;
+pub mod render;
+
+pub use cli::{run, Cli};

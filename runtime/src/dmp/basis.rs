@@ -1,0 +1,150 @@
+//! Gaussian basis functions in phase, centred evenly in time, and the forcing term they form.
+
+use serde::{Deserialize, Serialize};
+
+/// Bases whose log-value lies more than this below the largest one are treated as zero.
+const LOG_CUTOFF: f64 = 36.0;
+
+/// The Gaussian bases `ψᵢ(s) = exp(−hᵢ (s − cᵢ)²)` of a DMP (see the [module docs](super)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Basis {
+    /// Centres `cᵢ` in phase, decreasing from 1 to `exp(−α_s)`.
+    pub centers: Vec<f64>,
+    /// Inverse widths `hᵢ`.
+    pub widths: Vec<f64>,
+    /// Decay rate of the canonical system the centres were placed for.
+    pub alpha_s: f64,
+}
+
+/// The bases that matter at one phase: `values[k]` is `ψ_{first+k}(s) · exp(−log_scale)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Window {
+    pub(crate) first: usize,
+    pub(crate) len: usize,
+    pub(crate) log_scale: f64,
+}
+
+impl Basis {
+    /// `n_basis` bases evenly spaced in time over `[0, τ]` for decay rate `alpha_s`.
+    pub fn new(n_basis: usize, alpha_s: f64, width_factor: f64) -> Self {
+        let n = n_basis.max(2);
+        let centers: Vec<f64> = (0..n)
+            .map(|i| (-alpha_s * i as f64 / (n - 1) as f64).exp())
+            .collect();
+        let widths = (0..n)
+            .map(|i| {
+                let spacing = if i + 1 < n {
+                    centers[i] - centers[i + 1]
+                } else {
+                    centers[i - 1] - centers[i]
+                };
+                width_factor / (spacing * spacing)
+            })
+            .collect();
+        Self {
+            centers,
+            widths,
+            alpha_s,
+        }
+    }
+
+    /// Number of bases.
+    pub fn len(&self) -> usize {
+        self.centers.len()
+    }
+
+    /// True when there are no bases.
+    pub fn is_empty(&self) -> bool {
+        self.centers.is_empty()
+    }
+
+    /// Evaluates the non-negligible bases at phase `s` into `out[first..first + len]` (`out`
+    /// needs [`Basis::len`] entries), scaled so that the largest is 1. Allocation-free.
+    pub(crate) fn eval(&self, s: f64, out: &mut [f64]) -> Window {
+        let n = self.len();
+        let log_value = |i: usize| -self.widths[i] * (s - self.centers[i]).powi(2);
+        let u = if s > 0.0 {
+            -s.ln() / self.alpha_s * (n - 1) as f64
+        } else {
+            (n - 1) as f64
+        };
+        let centre = (u.round().max(0.0) as usize).min(n - 1);
+        let mut log_max = log_value(centre);
+        out[centre] = log_max;
+        let mut first = centre;
+        while first > 0 {
+            let value = log_value(first - 1);
+            if value < log_max - LOG_CUTOFF {
+                break;
+            }
+            first -= 1;
+            out[first] = value;
+            log_max = log_max.max(value);
+        }
+        let mut end = centre + 1;
+        while end < n {
+            let value = log_value(end);
+            if value < log_max - LOG_CUTOFF {
+                break;
+            }
+            out[end] = value;
+            log_max = log_max.max(value);
+            end += 1;
+        }
+        for value in &mut out[first..end] {
+            *value = (*value - log_max).exp();
+        }
+        Window {
+            first,
+            len: end - first,
+            log_scale: log_max,
+        }
+    }
+
+    /// The forcing term `Σ wᵢ ψᵢ(s) / Σ ψᵢ(s) · s`, using `scratch` ([`Basis::len`] entries).
+    pub fn forcing(&self, weights: &[f64], s: f64, scratch: &mut [f64]) -> f64 {
+        let window = self.eval(s, scratch);
+        let range = window.first..window.first + window.len;
+        let (num, den) = scratch[range.clone()]
+            .iter()
+            .zip(&weights[range])
+            .fold((0.0, 0.0), |(num, den), (psi, w)| {
+                (num + psi * w, den + psi)
+            });
+        num / den * s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_matches_full_evaluation() {
+        let basis = Basis::new(50, 100f64.ln(), 1.0);
+        let mut out = vec![0.0; 50];
+        for k in 0..=200 {
+            let s = (-(100f64.ln()) * k as f64 / 150.0).exp();
+            let window = basis.eval(s, &mut out);
+            let full: Vec<f64> = (0..50)
+                .map(|i| (-basis.widths[i] * (s - basis.centers[i]).powi(2)).exp())
+                .collect();
+            let full_sum: f64 = full.iter().sum();
+            let window_sum: f64 = out[window.first..window.first + window.len]
+                .iter()
+                .sum::<f64>()
+                * window.log_scale.exp();
+            if full_sum > 1e-200 {
+                assert!(
+                    (window_sum - full_sum).abs() <= 1e-12 * full_sum,
+                    "s {s}: {window_sum} vs {full_sum}"
+                );
+            }
+            assert!(window.len <= 16, "window of {} bases", window.len);
+            // Normalised values stay defined far past the last centre, where plain exp underflows.
+            let weights = vec![2.0; 50];
+            let f = basis.forcing(&weights, s, &mut out);
+            assert!((f - 2.0 * s).abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! [`DmpRollout`]: integrating a [`Dmp`] step by step without allocating.
+
+use super::trajectory::Dmp;
+use super::DmpError;
+
+/// The running state of a [`Dmp`]: position, scaled velocity `v = τ ẋ`, phase, and the start,
+/// goal and `τ` in force now. All buffers are allocated once in [`DmpRollout::new`];
+/// [`DmpRollout::step`] does not allocate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DmpRollout {
+    x: Vec<f64>,
+    v: Vec<f64>,
+    start: Vec<f64>,
+    goal: Vec<f64>,
+    tau_s: f64,
+    s: f64,
+    t_s: f64,
+    scratch: Vec<f64>,
+}
+
+impl DmpRollout {
+    /// A rollout at rest at the demonstrated start, aiming at the demonstrated goal.
+    pub fn new(dmp: &Dmp) -> Self {
+        Self {
+            x: dmp.start.clone(),
+            v: vec![0.0; dmp.n_dims()],
+            start: dmp.start.clone(),
+            goal: dmp.goal.clone(),
+            tau_s: dmp.tau_s,
+            s: 1.0,
+            t_s: 0.0,
+            scratch: vec![0.0; dmp.basis.len()],
+        }
+    }
+
+    /// Current position, one value per channel.
+    pub fn position(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// Current velocity `ẋ = v / τ`, written into `out` (one value per channel).
+    pub fn velocity_into(&self, out: &mut [f64]) {
+        for (o, v) in out.iter_mut().zip(&self.v) {
+            *o = v / self.tau_s;
+        }
+    }
+
+    /// Current phase `s`.
+    pub fn phase(&self) -> f64 {
+        self.s
+    }
+
+    /// Time since the (re)start [s].
+    pub fn time_s(&self) -> f64 {
+        self.t_s
+    }
+
+    /// Current goal.
+    pub fn goal(&self) -> &[f64] {
+        &self.goal
+    }
+
+    /// Current `τ` [s].
+    pub fn tau_s(&self) -> f64 {
+        self.tau_s
+    }
+
+    /// Changes the goal; takes effect at the next step (allowed while running).
+    pub fn set_goal(&mut self, goal: &[f64]) -> Result<(), DmpError> {
+        copy_checked(&mut self.goal, goal, "goal")
+    }
+
+    /// Changes the start `x₀` used by the `−K (g − x₀) s` term (allowed while running).
+    pub fn set_start(&mut self, start: &[f64]) -> Result<(), DmpError> {
+        copy_checked(&mut self.start, start, "start")
+    }
+
+    /// Changes `τ` (allowed while running); larger is slower.
+    pub fn set_tau(&mut self, tau_s: f64) -> Result<(), DmpError> {
+        if !(tau_s.is_finite() && tau_s > 0.0) {
+            return Err(DmpError::InvalidConfig {
+                name: "tau_s",
+                reason: "must be a positive number of seconds".to_owned(),
+            });
+        }
+        self.tau_s = tau_s;
+        Ok(())
+    }
+
+    /// Restarts at rest from `position` (which also becomes the start), with phase 1.
+    pub fn restart_from(&mut self, position: &[f64]) -> Result<(), DmpError> {
+        copy_checked(&mut self.start, position, "start")?;
+        self.x.copy_from_slice(position);
+        self.v.iter_mut().for_each(|v| *v = 0.0);
+        self.s = 1.0;
+        self.t_s = 0.0;
+        Ok(())
+    }
+
+    /// Advances by `dt_s` (semi-implicit Euler; steps longer than `0.02 τ / √K` are split).
+    pub fn step(&mut self, dmp: &Dmp, dt_s: f64) {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return;
+        }
+        let k = dmp.config.stiffness;
+        let d = dmp.config.damping();
+        let canonical = dmp.canonical();
+        let max_step = 0.02 * self.tau_s / k.sqrt();
+        let substeps = (dt_s / max_step).ceil().max(1.0) as usize;
+        let h = dt_s / substeps as f64;
+        for _ in 0..substeps {
+            let window = dmp.basis.eval(self.s, &mut self.scratch);
+            let range = window.first..window.first + window.len;
+            let den: f64 = self.scratch[range.clone()].iter().sum();
+            for c in 0..self.x.len() {
+                let num: f64 = self.scratch[range.clone()]
+                    .iter()
+                    .zip(&dmp.weights[c][range.clone()])
+                    .map(|(p, w)| p * w)
+                    .sum();
+                let forcing = num / den * self.s;
+                let (g, x0, x) = (self.goal[c], self.start[c], self.x[c]);
+                let accel = k * (g - x) - d * self.v[c] - k * (g - x0) * self.s + k * forcing;
+                self.v[c] += h * accel / self.tau_s;
+                self.x[c] += h * self.v[c] / self.tau_s;
+            }
+            self.s = canonical.step(self.s, h, self.tau_s);
+            self.t_s += h;
+        }
+    }
+}
+
+fn copy_checked(dst: &mut [f64], src: &[f64], what: &'static str) -> Result<(), DmpError> {
+    if dst.len() != src.len() {
+        return Err(DmpError::LengthMismatch {
+            what,
+            expected: dst.len(),
+            found: src.len(),
+        });
+    }
+    if let Some(index) = src.iter().position(|v| !v.is_finite()) {
+        return Err(DmpError::NonFinite { what, index });
+    }
+    dst.copy_from_slice(src);
+    Ok(())
+}

@@ -1,0 +1,128 @@
+//! [`Dmp`]: a set of 1-D DMPs (Cartesian coordinates, force components) sharing one phase.
+
+use nalgebra::SVector;
+use serde::{Deserialize, Serialize};
+
+use super::basis::Basis;
+use super::canonical::CanonicalSystem;
+use super::fit::{derivatives, fit_weights};
+use super::rollout::DmpRollout;
+use super::{check_times, DmpConfig, DmpError};
+
+/// A learned multi-channel DMP: one transformation system per channel, one canonical system.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Dmp {
+    /// Parameters it was learned with.
+    pub config: DmpConfig,
+    /// The basis functions.
+    pub basis: Basis,
+    /// Duration of the demonstration [s]: the default `τ`.
+    pub tau_s: f64,
+    /// Demonstrated start, one value per channel (units of the channel).
+    pub start: Vec<f64>,
+    /// Demonstrated goal, one value per channel.
+    pub goal: Vec<f64>,
+    /// Forcing-term weights, `weights[channel][basis]`.
+    pub weights: Vec<Vec<f64>>,
+}
+
+impl Dmp {
+    /// Learns a DMP from `channels[c][k]` sampled at times `t_s[k]` (any spacing).
+    pub fn fit(config: &DmpConfig, t_s: &[f64], channels: &[&[f64]]) -> Result<Self, DmpError> {
+        config.validate()?;
+        check_times(t_s, "trajectory")?;
+        for channel in channels {
+            if channel.len() != t_s.len() {
+                return Err(DmpError::LengthMismatch {
+                    what: "channel",
+                    expected: t_s.len(),
+                    found: channel.len(),
+                });
+            }
+            if let Some(index) = channel.iter().position(|v| !v.is_finite()) {
+                return Err(DmpError::NonFinite {
+                    what: "channel",
+                    index,
+                });
+            }
+        }
+        let n = t_s.len();
+        let t0 = t_s[0];
+        let tau = t_s[n - 1] - t0;
+        let times: Vec<f64> = t_s.iter().map(|t| t - t0).collect();
+        let canonical = CanonicalSystem {
+            alpha_s: config.alpha_s,
+        };
+        let phases: Vec<f64> = times.iter().map(|&t| canonical.phase(t, tau)).collect();
+        let (k, d) = (config.stiffness, config.damping());
+        let (mut dx, mut ddx) = (vec![0.0; n], vec![0.0; n]);
+        let mut targets = vec![vec![0.0; n]; channels.len()];
+        let (mut start, mut goal) = (Vec::new(), Vec::new());
+        for (channel, target) in channels.iter().zip(&mut targets) {
+            derivatives(&times, channel, &mut dx, &mut ddx);
+            let (x0, g) = (channel[0], channel[n - 1]);
+            for idx in 0..n {
+                let s = phases[idx];
+                target[idx] = (tau * tau * ddx[idx] + d * tau * dx[idx]) / k - (g - channel[idx])
+                    + (g - x0) * s;
+            }
+            start.push(x0);
+            goal.push(g);
+        }
+        let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
+        let target_refs: Vec<&[f64]> = targets.iter().map(Vec::as_slice).collect();
+        let weights = fit_weights(&basis, config.regression, &phases, &target_refs)?;
+        Ok(Self {
+            config: config.clone(),
+            basis,
+            tau_s: tau,
+            start,
+            goal,
+            weights,
+        })
+    }
+
+    /// Learns a DMP from `D`-dimensional points (e.g. positions, forces) at times `t_s`.
+    pub fn fit_points<const D: usize>(
+        config: &DmpConfig,
+        t_s: &[f64],
+        points: &[SVector<f64, D>],
+    ) -> Result<Self, DmpError> {
+        let channels: Vec<Vec<f64>> = (0..D)
+            .map(|axis| points.iter().map(|p| p[axis]).collect())
+            .collect();
+        let refs: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+        Self::fit(config, t_s, &refs)
+    }
+
+    /// Number of channels.
+    pub fn n_dims(&self) -> usize {
+        self.start.len()
+    }
+
+    /// The canonical system.
+    pub fn canonical(&self) -> CanonicalSystem {
+        CanonicalSystem {
+            alpha_s: self.config.alpha_s,
+        }
+    }
+
+    /// A rollout at the demonstrated start, goal and `τ` (change them with its setters).
+    pub fn rollout(&self) -> DmpRollout {
+        DmpRollout::new(self)
+    }
+
+    /// Convenience: rolls out from the demonstrated start for `duration_s` at step `dt_s` and
+    /// returns the sampled positions `out[k][channel]` at `t = k dt` (including `t = 0`).
+    pub fn reproduce(&self, dt_s: f64, duration_s: f64) -> Vec<Vec<f64>> {
+        let mut rollout = self.rollout();
+        let steps = (duration_s / dt_s).round() as usize;
+        let mut out = Vec::with_capacity(steps + 1);
+        out.push(rollout.position().to_vec());
+        for _ in 0..steps {
+            rollout.step(self, dt_s);
+            out.push(rollout.position().to_vec());
+        }
+        out
+    }
+}

@@ -1,0 +1,437 @@
+//! Scene files (TOML): the robot, simulation settings, the wrist sensor and the objects to touch,
+//! with `--set key=value` overrides for experiments.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::SensorConfig;
+
+/// Why a scene file could not be read, parsed or changed. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene `{file}`: {source}")]
+    Io {
+        /// The scene file.
+        file: String,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// Not TOML, or a field of the wrong type or name.
+    #[error("malformed scene `{file}`: {message}")]
+    Syntax {
+        /// The scene file.
+        file: String,
+        /// The parser's description.
+        message: String,
+    },
+    /// A well-typed value that makes no physical sense.
+    #[error("scene `{file}`: `{key}` = `{value}`: {reason}")]
+    Invalid {
+        /// The scene file.
+        file: String,
+        /// The key, as written in an override (`table.size`).
+        key: String,
+        /// The offending value.
+        value: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// An override whose key does not exist in the scene.
+    #[error("scene `{file}`: cannot set `{key}` = `{value}`: {reason}")]
+    BadOverride {
+        /// The scene file.
+        file: String,
+        /// The key given.
+        key: String,
+        /// The value given.
+        value: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// `[robot]`: which robot, which tool and sensor frame, where it starts.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// The URDF, relative to the scene file.
+    pub urdf: PathBuf,
+    /// The tool link (default: the last link of the chain).
+    #[serde(default)]
+    pub tool: Option<String>,
+    /// The link the wrist sensor measures at (default `lwr_flange`).
+    #[serde(default = "default_sensor_link")]
+    pub sensor: String,
+    /// Initial joint positions, rad (default: all zero).
+    #[serde(default)]
+    pub q0: Option<Vec<f64>>,
+}
+
+fn default_sensor_link() -> String {
+    crate::robot::LWR4_FLANGE.to_owned()
+}
+
+/// `[sim]`: integration settings.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimSpec {
+    /// Step, s (skillc runs at 1 kHz).
+    pub dt: f64,
+    /// Gravity in the world (= robot base) frame, m/s².
+    pub gravity: [f64; 3],
+}
+
+impl Default for SimSpec {
+    fn default() -> Self {
+        SimSpec {
+            dt: 1e-3,
+            gravity: [0.0, 0.0, -9.81],
+        }
+    }
+}
+
+/// What an object is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum ObjectKind {
+    /// A fixed box (`size`): tables, walls.
+    Box,
+    /// A fixed cylinder along its local z axis (`radius`, `length`): a curved surface to contour.
+    Cylinder,
+    /// A spring-loaded push button: a cylindrical cap (`radius`, `height`, `mass`) on a prismatic joint
+    /// along its local z axis, pushed up by a spring (`stiffness`, `preload_n`, `damping`) against a
+    /// stop, pressable down by `travel`.
+    Button,
+}
+
+/// `[objects.NAME]`: one object of the scene. Which fields apply depends on `kind`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// Box, cylinder or button.
+    pub kind: ObjectKind,
+    /// Centre in the world frame, m (for a button: the cap's centre at rest).
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw, rad (URDF convention).
+    #[serde(default)]
+    pub rpy: [f64; 3],
+    /// Coulomb friction coefficient with the tool.
+    #[serde(default = "default_friction")]
+    pub friction: f64,
+    /// Box extents along x, y, z, m.
+    #[serde(default)]
+    pub size: Option<[f64; 3]>,
+    /// Cylinder or button-cap radius, m.
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// Cylinder length, m.
+    #[serde(default)]
+    pub length: Option<f64>,
+    /// Button-cap height, m.
+    #[serde(default)]
+    pub height: Option<f64>,
+    /// Button-cap mass, kg.
+    #[serde(default)]
+    pub mass: Option<f64>,
+    /// Button spring stiffness, N/m.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Button spring force at rest (against the upper stop), N.
+    #[serde(default)]
+    pub preload_n: Option<f64>,
+    /// Button viscous damping, N s/m.
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Button travel from rest to the lower stop, m.
+    #[serde(default)]
+    pub travel: Option<f64>,
+}
+
+fn default_friction() -> f64 {
+    0.5
+}
+
+/// A whole scene file, typed.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// The robot.
+    pub robot: RobotSpec,
+    /// Integration settings.
+    #[serde(default)]
+    pub sim: SimSpec,
+    /// The wrist sensor.
+    #[serde(default)]
+    pub sensor: SensorConfig,
+    /// The objects, by name (sorted, so construction order is deterministic).
+    #[serde(default)]
+    pub objects: BTreeMap<String, ObjectSpec>,
+}
+
+/// A scene read from a file, possibly changed by [`Scene::set`].
+#[derive(Debug, Clone)]
+pub struct Scene {
+    file: String,
+    base_dir: PathBuf,
+    raw: toml::Table,
+    spec: SceneSpec,
+}
+
+const SECTIONS: [&str; 4] = ["robot", "sim", "sensor", "objects"];
+
+impl Scene {
+    /// Reads a scene file. Relative paths inside it (the URDF) are relative to the file.
+    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Scene::from_toml(&text, &file, &base_dir)
+    }
+
+    /// Parses scene text; `file` names it in errors, `base_dir` resolves relative paths.
+    pub fn from_toml(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+        let mut raw: toml::Table = text.parse().map_err(|err: toml::de::Error| SceneError::Syntax {
+            file: file.to_owned(),
+            message: one_line(&err.to_string()),
+        })?;
+        floats_everywhere(&mut raw);
+        let spec = typed(&raw, file)?;
+        Ok(Scene {
+            file: file.to_owned(),
+            base_dir: base_dir.to_path_buf(),
+            raw,
+            spec,
+        })
+    }
+
+    /// The scene file's name, as used in errors.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+
+    /// The typed, validated scene.
+    pub fn spec(&self) -> &SceneSpec {
+        &self.spec
+    }
+
+    /// The robot URDF's path, resolved against the scene file's folder.
+    pub fn urdf_path(&self) -> PathBuf {
+        self.base_dir.join(&self.spec.robot.urdf)
+    }
+
+    /// Changes one value, as `skillc … --set key=value` does, and re-validates the scene.
+    ///
+    /// Keys are dotted paths into the file (`sensor.cutoff_hz`, `objects.table.xyz`); an object's name
+    /// may stand for `objects.NAME`, `x`/`y`/`z` for the components of `xyz`, `roll`/`pitch`/`yaw` for
+    /// `rpy`, and a number for an array index (`table.size.2`). Values are TOML (`0.1`, `[1, 2, 3]`,
+    /// `true`); anything else is taken as a string. On error the scene is left unchanged.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
+        let bad = |reason: String| SceneError::BadOverride {
+            file: self.file.clone(),
+            key: key.to_owned(),
+            value: value.to_owned(),
+            reason,
+        };
+        let mut path: Vec<String> = key.split('.').map(str::to_owned).collect();
+        if path.iter().any(String::is_empty) {
+            return Err(bad("empty key segment".to_owned()));
+        }
+        let object_names: Vec<String> = self.spec.objects.keys().cloned().collect();
+        if !SECTIONS.contains(&path[0].as_str()) {
+            if object_names.contains(&path[0]) {
+                path.insert(0, "objects".to_owned());
+            } else {
+                return Err(bad(format!(
+                    "unknown section or object `{}` (sections: robot, sim, sensor, objects; objects: {})",
+                    path[0],
+                    object_names.join(", ")
+                )));
+            }
+        }
+        let last = path.len() - 1;
+        let alias = match path[last].as_str() {
+            "x" => Some(("xyz", 0)),
+            "y" => Some(("xyz", 1)),
+            "z" => Some(("xyz", 2)),
+            "roll" => Some(("rpy", 0)),
+            "pitch" => Some(("rpy", 1)),
+            "yaw" => Some(("rpy", 2)),
+            _ => None,
+        };
+        if let Some((field, idx)) = alias {
+            path[last] = field.to_owned();
+            path.push(idx.to_string());
+        }
+        let mut new_value = parse_value(value);
+        if !path.last().is_some_and(|seg| seg == "seed") {
+            floats_in_value(&mut new_value);
+        }
+        let mut raw = self.raw.clone();
+        set_path(&mut raw, &path, new_value).map_err(bad)?;
+        let spec = typed(&raw, &self.file).map_err(|err| match err {
+            SceneError::Syntax { message, .. } => bad(message),
+            other => other,
+        })?;
+        self.raw = raw;
+        self.spec = spec;
+        Ok(())
+    }
+}
+
+fn one_line(message: &str) -> String {
+    message
+        .lines()
+        .map(str::trim)
+        .filter(|line| !line.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn parse_value(text: &str) -> toml::Value {
+    format!("v = {text}")
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|mut table| table.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(text.to_owned()))
+}
+
+/// Physical quantities are f64: accept `1` where `1.0` is meant (except seeds, which stay integers).
+fn floats_everywhere(table: &mut toml::Table) {
+    for (key, value) in table.iter_mut() {
+        if key != "seed" {
+            floats_in_value(value);
+        }
+    }
+}
+
+fn floats_in_value(value: &mut toml::Value) {
+    match value {
+        toml::Value::Integer(int) => *value = toml::Value::Float(*int as f64),
+        toml::Value::Array(items) => items.iter_mut().for_each(floats_in_value),
+        toml::Value::Table(table) => floats_everywhere(table),
+        _ => {}
+    }
+}
+
+fn set_path(table: &mut toml::Table, path: &[String], value: toml::Value) -> Result<(), String> {
+    let (head, rest) = path.split_first().ok_or_else(|| "empty key".to_owned())?;
+    if rest.is_empty() {
+        table.insert(head.clone(), value);
+        return Ok(());
+    }
+    let entry = table
+        .entry(head.clone())
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    set_in_value(entry, rest, value)
+}
+
+fn set_in_value(target: &mut toml::Value, path: &[String], value: toml::Value) -> Result<(), String> {
+    match target {
+        toml::Value::Table(table) => set_path(table, path, value),
+        toml::Value::Array(items) => {
+            let idx: usize = path[0]
+                .parse()
+                .map_err(|_| format!("`{}` is not an index into an array", path[0]))?;
+            let len = items.len();
+            let slot = items
+                .get_mut(idx)
+                .ok_or_else(|| format!("index {idx} is out of range for an array of {len}"))?;
+            if path.len() == 1 {
+                *slot = value;
+                Ok(())
+            } else {
+                set_in_value(slot, &path[1..], value)
+            }
+        }
+        _ => Err(format!("`{}` is inside a value that is not a table or array", path[0])),
+    }
+}
+
+fn typed(raw: &toml::Table, file: &str) -> Result<SceneSpec, SceneError> {
+    let spec: SceneSpec = raw.clone().try_into().map_err(|err: toml::de::Error| SceneError::Syntax {
+        file: file.to_owned(),
+        message: one_line(&err.to_string()),
+    })?;
+    validate(&spec, file)?;
+    Ok(spec)
+}
+
+fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
+    let invalid = |key: String, value: String, reason: &str| SceneError::Invalid {
+        file: file.to_owned(),
+        key,
+        value,
+        reason: reason.to_owned(),
+    };
+    if !(spec.sim.dt > 0.0 && spec.sim.dt <= 0.01) {
+        return Err(invalid("sim.dt".into(), spec.sim.dt.to_string(), "the step must be in (0, 0.01] s"));
+    }
+    if spec.sim.gravity.iter().any(|g| !g.is_finite()) {
+        return Err(invalid("sim.gravity".into(), format!("{:?}", spec.sim.gravity), "must be finite"));
+    }
+    let sensor = &spec.sensor;
+    if !(sensor.noise_force_n >= 0.0 && sensor.noise_torque_nm >= 0.0) {
+        return Err(invalid(
+            "sensor.noise_force_n".into(),
+            format!("{} / {}", sensor.noise_force_n, sensor.noise_torque_nm),
+            "noise must be zero or positive",
+        ));
+    }
+    if !sensor.cutoff_hz.is_finite() || sensor.bias.iter().any(|b| !b.is_finite()) {
+        return Err(invalid("sensor".into(), format!("{sensor:?}"), "cutoff and bias must be finite"));
+    }
+    if let Some(q0) = &spec.robot.q0 {
+        if q0.iter().any(|q| !q.is_finite()) {
+            return Err(invalid("robot.q0".into(), format!("{q0:?}"), "must be finite"));
+        }
+    }
+    for (name, object) in &spec.objects {
+        let key = |field: &str| format!("{name}.{field}");
+        if object.xyz.iter().chain(&object.rpy).any(|v| !v.is_finite()) {
+            return Err(invalid(key("xyz"), format!("{:?} {:?}", object.xyz, object.rpy), "pose must be finite"));
+        }
+        if !(object.friction >= 0.0 && object.friction.is_finite()) {
+            return Err(invalid(key("friction"), object.friction.to_string(), "must be zero or positive"));
+        }
+        let positive = |field: &str, value: Option<f64>| -> Result<f64, SceneError> {
+            match value {
+                None => Err(invalid(key(field), "(missing)".into(), &format!("a {:?} needs `{field}`", object.kind).to_lowercase())),
+                Some(v) if v > 0.0 && v.is_finite() => Ok(v),
+                Some(v) => Err(invalid(key(field), v.to_string(), "must be positive")),
+            }
+        };
+        match object.kind {
+            ObjectKind::Box => {
+                let size = object.size.ok_or_else(|| invalid(key("size"), "(missing)".into(), "a box needs `size`"))?;
+                if size.iter().any(|s| !(*s > 0.0 && s.is_finite())) {
+                    return Err(invalid(key("size"), format!("{size:?}"), "extents must be positive"));
+                }
+            }
+            ObjectKind::Cylinder => {
+                positive("radius", object.radius)?;
+                positive("length", object.length)?;
+            }
+            ObjectKind::Button => {
+                positive("radius", object.radius)?;
+                positive("height", object.height)?;
+                positive("mass", object.mass)?;
+                positive("stiffness", object.stiffness)?;
+                positive("travel", object.travel)?;
+                let preload = object.preload_n.unwrap_or(0.0);
+                let damping = object.damping.unwrap_or(0.0);
+                if !(preload >= 0.0 && damping >= 0.0) {
+                    return Err(invalid(key("preload_n"), format!("{preload} / {damping}"), "preload and damping must be zero or positive"));
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1561,7 +1561,9 @@ impl<'a> Checker<'a> {
             self.report(diag);
         }
 
-        self.transition_analysis(state, &state_transitions, motion.is_some(), force, has_force_axes, scope);
+        // A `move` that failed to resolve still runs a motion: judge guards by what was written.
+        let writes_move = seen.contains_key("move");
+        self.transition_analysis(state, &state_transitions, writes_move, force, has_force_axes, scope);
 
         if self.error_count() > errors_before {
             return None;

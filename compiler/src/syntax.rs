@@ -36,7 +36,7 @@ pub fn parse(src: &SourceFile, file: usize) -> (File, Vec<Diag>) {
             let root = pairs.next().expect("grammar: `file` yields one pair");
             (file_rule(root), Vec::new())
         }
-        Err(err) => (File::default(), vec![syntax_error(err, file)]),
+        Err(err) => (File::default(), vec![syntax_error(err, file, &src.text)]),
     }
 }
 
@@ -78,7 +78,7 @@ fn check_nesting(src: &SourceFile, file: usize) -> Option<Diag> {
     None
 }
 
-fn syntax_error(err: pest::error::Error<Rule>, file: usize) -> Diag {
+fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> Diag {
     let span = match err.location {
         InputLocation::Pos(at) => Span::new(at, at),
         InputLocation::Span((start, end)) => Span::new(start, end),
@@ -103,8 +103,32 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize) -> Diag {
         }
         pest::error::ErrorVariant::CustomError { message } => (message.clone(), String::new()),
     };
+    // A reserved word where a name was expected reads as a puzzling "expected a name".
+    let word: String = src_text
+        .get(span.start..)
+        .unwrap_or("")
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
+    if label.contains("a name") && KEYWORDS.contains(&word.as_str()) {
+        return Diag::new(
+            Code::Unexpected,
+            file,
+            Span::new(span.start, span.start + word.len()),
+            format!("`{word}` is a keyword and cannot be used as a name"),
+            "keyword used as a name",
+        )
+        .help(format!("rename it, e.g. `{word}_frame`"));
+    }
     Diag::new(Code::Unexpected, file, span, message, label)
 }
+
+/// Words the grammar reserves (they may not be names); keep in step with `keyword` in skill.pest.
+const KEYWORDS: &[&str] = &[
+    "skill", "state", "learn", "terminal", "task", "step", "fallback", "import", "on", "in", "and", "or", "not",
+    "then", "at", "up", "to", "along", "position", "expect", "from", "within", "control", "move", "apply",
+    "stiffness", "gains", "entry", "extend", "segment", "all",
+];
 
 fn join_or(items: &[&str]) -> String {
     match items {

@@ -1,0 +1,134 @@
+//! The `skillc` binary as a user runs it: exit codes, output formats, files written or not.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn skillc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_skillc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("skillc runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("skillc-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+#[test]
+fn check_exits_zero_on_the_standard_library() {
+    let out = skillc(&["check", "stdlib-skills/touch.skill", "stdlib-skills/press.skill", "stdlib-skills/slide.skill", "stdlib-skills/contour.skill"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no problems"));
+}
+
+#[test]
+fn check_exits_one_on_errors_and_two_on_a_missing_file() {
+    let out = skillc(&["check", "tests/corpus/err/unknown_name.skill"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("skill::check::unknown_name"), "{stderr}");
+    assert!(stderr.contains("did you mean `path`?"), "{stderr}");
+    assert!(!stderr.contains("\u{1b}["), "no colour when not on a terminal");
+
+    let out = skillc(&["check", "no/such/file.skill"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/file.skill"), "the missing file is named");
+}
+
+#[test]
+fn warnings_pass_unless_denied() {
+    let file = "tests/corpus/err/unused.skill";
+    assert_eq!(skillc(&["check", file]).status.code(), Some(0));
+    assert_eq!(skillc(&["check", "--deny-warnings", file]).status.code(), Some(1));
+}
+
+#[test]
+fn check_json_prints_one_object_per_diagnostic() {
+    let out = skillc(&["check", "--format", "json", "tests/corpus/err/many_problems.skill"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let objects: Vec<serde_json::Value> =
+        stdout.lines().map(|line| serde_json::from_str(line).expect("each line is JSON")).collect();
+    assert!(objects.len() >= 8);
+    for object in &objects {
+        for key in ["file", "line", "column", "end_line", "end_column", "severity", "code", "message", "help"] {
+            assert!(object.get(key).is_some(), "missing `{key}` in {object}");
+        }
+        assert_eq!(object["file"], "tests/corpus/err/many_problems.skill");
+    }
+    let first = &objects[0];
+    assert_eq!(first["code"], "skill::check::expect_mismatch");
+    assert_eq!(first["line"], 4);
+}
+
+#[test]
+fn compile_writes_the_ir_or_nothing() {
+    let dir = temp_dir("compile");
+    let good = dir.join("press.ir.json");
+    let out = skillc(&["compile", "stdlib-skills/press.skill", "-o", good.to_str().expect("utf8 path")]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let ir: skill_ir::Program = serde_json::from_slice(&std::fs::read(&good).expect("written")).expect("valid IR");
+    assert_eq!(ir.skills[0].name, "press");
+
+    let bad = dir.join("bad.ir.json");
+    let out = skillc(&["compile", "tests/corpus/err/dead_end.skill", "-o", bad.to_str().expect("utf8 path")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!bad.exists(), "nothing is written when the file has errors");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nothing written"));
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+#[test]
+fn graph_draws_guards_on_edges() {
+    let out = skillc(&["graph", "stdlib-skills/touch.skill"]);
+    assert_eq!(out.status.code(), Some(0));
+    let dot = String::from_utf8_lossy(&out.stdout);
+    assert!(dot.starts_with("digraph"));
+    assert!(dot.contains("\"touch.approach\" -> \"touch.settle\" [label=\"force(contact.z) >= touch\"]"), "{dot}");
+    let out = skillc(&["graph", "--format", "mermaid", "stdlib-skills/press.skill"]);
+    let mermaid = String::from_utf8_lossy(&out.stdout);
+    assert!(mermaid.starts_with("stateDiagram-v2"));
+    assert!(mermaid.contains("press__press --> press__retract : motion_done"), "{mermaid}");
+}
+
+#[test]
+fn fmt_rewrites_in_place_and_check_only_reports() {
+    let dir = temp_dir("fmt");
+    let file = dir.join("messy.skill");
+    let messy = "skill s{learn{motion p=dmp(segment 1)}\nstate a{move p\non motion_done->d}\nterminal d:success}\n";
+    std::fs::write(&file, messy).expect("write");
+    let path = file.to_str().expect("utf8 path");
+
+    let out = skillc(&["fmt", "--check", path]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&file).expect("read"), messy, "--check changes nothing");
+
+    let out = skillc(&["fmt", path]);
+    assert_eq!(out.status.code(), Some(0));
+    let formatted = std::fs::read_to_string(&file).expect("read");
+    assert!(formatted.contains("    state a {\n        move p from current\n"), "{formatted}");
+    assert_eq!(skillc(&["fmt", "--check", path]).status.code(), Some(0), "formatted files pass --check");
+
+    std::fs::write(&file, "skill {").expect("write");
+    let out = skillc(&["fmt", path]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&file).expect("read"), "skill {", "files that do not parse are left alone");
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+#[test]
+fn stdlib_files_are_formatted() {
+    let files: Vec<String> = std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib-skills"))
+        .expect("stdlib dir")
+        .filter_map(Result::ok)
+        .map(|e| format!("stdlib-skills/{}", e.file_name().to_string_lossy()))
+        .collect();
+    let mut args = vec!["fmt", "--check"];
+    args.extend(files.iter().map(String::as_str));
+    let out = skillc(&args);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+}

@@ -5,3 +5,4 @@ pub mod robot;
 pub mod dmp;
 pub mod plant;
 pub mod sim;
+pub mod learn;

@@ -1,0 +1,1 @@
+//! Constraints (placeholder, filled in below).

@@ -1,0 +1,1 @@
+//! Forces (placeholder, filled in below).

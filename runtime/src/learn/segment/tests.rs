@@ -1,0 +1,239 @@
+//! Ground-truth tests: piecewise synthetic signals with known breaks.
+
+use nalgebra::Vector3;
+
+use super::*;
+use crate::learn::testutil::Rng;
+
+/// Piecewise-constant rows with the given `(end, means)` pieces plus Gaussian noise.
+fn piecewise(pieces: &[(usize, [f64; 3])], noise: f64, seed: u64) -> Features {
+    let mut rng = Rng::new(seed);
+    let mut data = Vec::new();
+    let mut start = 0;
+    for (end, mean) in pieces {
+        for _ in start..*end {
+            data.extend(mean.iter().map(|m| m + noise * rng.normal()));
+        }
+        start = *end;
+    }
+    let mut features = Features { data, dims: 3 };
+    standardise(&mut features);
+    features
+}
+
+fn assert_breaks(segments: &[Segment], expected: &[usize], tolerance: usize, what: &str) {
+    let found = boundaries(segments);
+    assert_eq!(
+        found.len(),
+        expected.len(),
+        "{what}: boundaries {found:?}, expected {expected:?}"
+    );
+    for (f, e) in found.iter().zip(expected) {
+        assert!(
+            f.abs_diff(*e) <= tolerance,
+            "{what}: boundary {f}, expected {e}"
+        );
+    }
+}
+
+const PIECES: [(usize, [f64; 3]); 3] = [
+    (1000, [0.0, 0.0, 0.0]),
+    (2100, [3.0, -2.0, 1.0]),
+    (3000, [1.0, 2.0, -3.0]),
+];
+
+#[test]
+fn connectivity_clustering_finds_breaks_with_every_linkage() {
+    let features = piecewise(&PIECES, 0.2, 1);
+    for linkage in [
+        Linkage::Ward,
+        Linkage::Complete,
+        Linkage::Average,
+        Linkage::Single,
+    ] {
+        for k in [1, 3] {
+            let config = ClusterConfig {
+                linkage,
+                temporal: Temporal::Connectivity { k },
+                ..ClusterConfig::default()
+            };
+            let segments = cluster(&features, &config).expect("valid input");
+            assert_breaks(&segments, &[1000, 2100], 2, &format!("{linkage:?} k={k}"));
+        }
+    }
+}
+
+#[test]
+fn connectivity_clustering_scales_to_50000_samples() {
+    let pieces = [
+        (17_000, [0.0, 0.0, 0.0]),
+        (41_000, [2.0, -1.0, 1.0]),
+        (50_000, [1.0, 2.0, -2.0]),
+    ];
+    let features = piecewise(&pieces, 0.3, 2);
+    let segments = cluster(&features, &ClusterConfig::default()).expect("valid input");
+    assert_breaks(&segments, &[17_000, 41_000], 3, "ward 50k");
+}
+
+#[test]
+fn time_feature_clustering_finds_breaks_within_a_block() {
+    let features = piecewise(&PIECES, 0.2, 3);
+    for linkage in [Linkage::Ward, Linkage::Complete, Linkage::Average] {
+        let config = ClusterConfig {
+            linkage,
+            temporal: Temporal::TimeFeature {
+                weight: 1.0,
+                max_blocks: 1000,
+            },
+            ..ClusterConfig::default()
+        };
+        let segments = cluster(&features, &config).expect("valid input");
+        assert_breaks(
+            &segments,
+            &[1000, 2100],
+            3,
+            &format!("{linkage:?} time feature"),
+        );
+    }
+}
+
+#[test]
+fn distance_cut_and_short_runs() {
+    // A 5-sample glitch inside the first piece must not become a segment.
+    let mut features = piecewise(&PIECES, 0.2, 4);
+    for k in 500..505 {
+        features.data[k * 3] += 4.0;
+    }
+    let config = ClusterConfig {
+        cut: Cut::Distance { threshold: 20.0 },
+        min_segment_samples: 50,
+        ..ClusterConfig::default()
+    };
+    let segments = cluster(&features, &config).expect("valid input");
+    assert_breaks(&segments, &[1000, 2100], 2, "distance cut");
+}
+
+#[test]
+fn clustering_rejects_bad_input() {
+    let features = Features {
+        data: vec![0.0, f64::NAN, 1.0],
+        dims: 1,
+    };
+    assert!(matches!(
+        cluster(&features, &ClusterConfig::default()),
+        Err(SegmentError::NonFinite { index: 1, .. })
+    ));
+    let features = piecewise(&PIECES, 0.2, 5);
+    let config = ClusterConfig {
+        temporal: Temporal::Connectivity { k: 0 },
+        ..ClusterConfig::default()
+    };
+    assert!(matches!(
+        cluster(&features, &config),
+        Err(SegmentError::InvalidConfig { name: "k", .. })
+    ));
+    let short = Features {
+        data: vec![0.0; 4],
+        dims: 1,
+    };
+    let config = ClusterConfig {
+        min_segment_samples: 10,
+        ..ClusterConfig::default()
+    };
+    assert!(matches!(
+        cluster(&short, &config),
+        Err(SegmentError::TooFewSamples { .. })
+    ));
+}
+
+fn changepoint_signal(seed: u64) -> (Features, Vec<f64>) {
+    let mut rng = Rng::new(seed);
+    let t: Vec<f64> = (0..3000).map(|k| k as f64 * 1e-3).collect();
+    let mut data = Vec::new();
+    for (k, &tk) in t.iter().enumerate() {
+        let (a, b) = if k < 1000 {
+            (0.0, 1.0)
+        } else if k < 2000 {
+            (2.0 + 3.0 * (tk - 1.0), -1.0)
+        } else {
+            (3.0, 0.5)
+        };
+        data.push(a + 0.1 * rng.normal());
+        data.push(b + 0.1 * rng.normal());
+    }
+    (Features { data, dims: 2 }, t)
+}
+
+#[test]
+fn changepoint_finds_breaks_and_models() {
+    let (features, t) = changepoint_signal(6);
+    let segments = changepoint(&features, &t, &ChangepointConfig::default()).expect("valid input");
+    let plain: Vec<Segment> = segments.iter().map(|s| s.segment).collect();
+    assert_breaks(&plain, &[1000, 2000], 3, "changepoint");
+    let models: Vec<SegmentModel> = segments.iter().map(|s| s.model).collect();
+    assert_eq!(
+        models,
+        [
+            SegmentModel::Constant,
+            SegmentModel::Linear,
+            SegmentModel::Constant
+        ]
+    );
+}
+
+#[test]
+fn changepoint_respects_min_length_and_expected_count() {
+    let (mut features, t) = changepoint_signal(7);
+    // A 20 ms step inside the first piece: shorter than the 50 ms minimum.
+    for k in 400..420 {
+        features.data[2 * k] += 3.0;
+    }
+    let config = ChangepointConfig {
+        min_length_s: 0.05,
+        ..ChangepointConfig::default()
+    };
+    let segments = changepoint(&features, &t, &config).expect("valid input");
+    assert!(
+        segments.iter().all(|s| s.segment.len() >= 50),
+        "{segments:?}"
+    );
+    let config = ChangepointConfig {
+        expected_segments: Some(3),
+        ..config
+    };
+    let segments = changepoint(&features, &t, &config).expect("valid input");
+    let plain: Vec<Segment> = segments.iter().map(|s| s.segment).collect();
+    assert_breaks(&plain, &[1000, 2000], 3, "changepoint merged to 3");
+}
+
+#[test]
+fn changepoint_with_few_particles_stays_close() {
+    let (features, t) = changepoint_signal(8);
+    let config = ChangepointConfig {
+        max_particles: 10,
+        ..ChangepointConfig::default()
+    };
+    let segments = changepoint(&features, &t, &config).expect("valid input");
+    let plain: Vec<Segment> = segments.iter().map(|s| s.segment).collect();
+    assert_breaks(&plain, &[1000, 2000], 5, "10 particles");
+}
+
+#[test]
+fn touch_splits_at_the_force_peak() {
+    let mut rng = Rng::new(9);
+    let force: Vec<Vector3<f64>> = (0..1000)
+        .map(|k| {
+            let bump = 8.0 * (-((k as f64 - 612.0) / 15.0).powi(2)).exp();
+            Vector3::new(0.0, 0.0, bump) + rng.vector(0.1)
+        })
+        .collect();
+    let [approach, retract] =
+        split_at_force_peak(&force, &TouchConfig::default()).expect("contact");
+    assert!(approach.end.abs_diff(612) <= 3, "split at {}", approach.end);
+    assert_eq!(retract.start, approach.end);
+    let quiet: Vec<Vector3<f64>> = (0..100).map(|_| rng.vector(0.1)).collect();
+    assert!(matches!(
+        split_at_force_peak(&quiet, &TouchConfig::default()),
+        Err(SegmentError::NoContact { .. })
+    ));
+}

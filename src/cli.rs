@@ -267,7 +267,8 @@ fn fmt(files: &[PathBuf], check_only: bool) -> u8 {
         };
         let source = match frontend::decode(&name, bytes) {
             Ok(source) => source,
-            Err((source, diag)) => {
+            Err(invalid) => {
+                let (source, diag) = *invalid;
                 let compilation = skill_compiler::Compilation { files: vec![source], diags: vec![diag], ast: Default::default(), program: None };
                 print_diags(&compilation);
                 status = status.max(1);

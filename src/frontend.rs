@@ -17,7 +17,7 @@ pub enum ReadError {
 }
 
 /// Turns raw bytes into a source file, or a diagnostic pointing at the first invalid byte.
-pub fn decode(name: &str, bytes: Vec<u8>) -> Result<SourceFile, (SourceFile, Diag)> {
+pub fn decode(name: &str, bytes: Vec<u8>) -> Result<SourceFile, Box<(SourceFile, Diag)>> {
     match String::from_utf8(bytes) {
         Ok(text) => Ok(SourceFile::new(name, text)),
         Err(err) => {
@@ -33,7 +33,7 @@ pub fn decode(name: &str, bytes: Vec<u8>) -> Result<SourceFile, (SourceFile, Dia
                 "invalid byte here",
             )
             .help("skill templates are UTF-8 text; is this a binary file?");
-            Err((source, diag))
+            Err(Box::new((source, diag)))
         }
     }
 }
@@ -44,7 +44,8 @@ pub fn compile_path(path: &Path) -> Result<Compilation, ReadError> {
     let bytes = std::fs::read(path).map_err(|source| ReadError::Io { path: name.clone(), source })?;
     let root = match decode(&name, bytes) {
         Ok(root) => root,
-        Err((source, diag)) => {
+        Err(invalid) => {
+            let (source, diag) = *invalid;
             return Ok(Compilation { files: vec![source], diags: vec![diag], ast: Default::default(), program: None })
         }
     };

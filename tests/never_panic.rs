@@ -34,7 +34,7 @@ fn compile_bytes(bytes: Vec<u8>) {
             }
             let _ = skillc::render::all_plain(&compilation, 80);
         }
-        Err((_, diag)) => assert_eq!(diag.code, Code::InvalidUtf8),
+        Err(invalid) => assert_eq!(invalid.1.code, Code::InvalidUtf8),
     }
 }
 
@@ -87,7 +87,8 @@ fn ten_megabytes_of_anything_get_one_diagnostic() {
 fn binary_input_is_reported_as_invalid_utf8_at_the_first_bad_byte() {
     let mut bytes = b"skill s {".to_vec();
     bytes.extend([0u8, 0xff, 0xfe, 0x00, 0x80]);
-    let Err((source, diag)) = skillc::frontend::decode("bin.skill", bytes) else { panic!("binary is not UTF-8") };
+    let Err(invalid) = skillc::frontend::decode("bin.skill", bytes) else { panic!("binary is not UTF-8") };
+    let (source, diag) = *invalid;
     assert_eq!(diag.code, Code::InvalidUtf8);
     assert_eq!(source.line_col(diag.span().start), (1, 11));
 }

@@ -1386,15 +1386,14 @@ impl<'a> Checker<'a> {
                     .active_state(id, stmts, state, &ids, &state_names, scope, &mut transitions)
                     .map(|active| ir::StateKind::Active(Box::new(active))),
             };
-            match kind {
-                Some(kind) => states.push(ir::State {
+            if let Some(kind) = kind {
+                states.push(ir::State {
                     id,
                     name: state.name.name.clone(),
                     doc: state.doc.join("\n"),
                     kind,
                     span: self.ir_span(state.name.span),
-                }),
-                None => {}
+                });
             }
         }
         // The machine's shape comes from the source, so it is analysed even when guards or

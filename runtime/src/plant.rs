@@ -93,7 +93,11 @@ pub(crate) fn saturate(robot: &Robot, torques: &[f64], out: &mut [f64]) -> Resul
         });
     }
     for ((slot, tau), joint) in out.iter_mut().zip(torques).zip(robot.joints()) {
-        *slot = if tau.is_nan() { 0.0 } else { tau.clamp(-joint.effort, joint.effort) };
+        *slot = if tau.is_nan() {
+            0.0
+        } else {
+            tau.clamp(-joint.effort, joint.effort)
+        };
     }
     Ok(())
 }
@@ -175,7 +179,12 @@ impl Plant for KinematicPlant {
         let lever = tool.translation.vector - sensor.translation.vector;
         let moment_sensor = moment + lever.cross(&force);
         out.wrench_base = Vector6::new(
-            force.x, force.y, force.z, moment_sensor.x, moment_sensor.y, moment_sensor.z,
+            force.x,
+            force.y,
+            force.z,
+            moment_sensor.x,
+            moment_sensor.y,
+            moment_sensor.z,
         );
         let rot_t = sensor.rotation.inverse();
         let f_s = rot_t * force;
@@ -191,7 +200,12 @@ impl Plant for KinematicPlant {
         let robot = &self.robot;
         robot.forward_kinematics(&mut self.data, self.q.as_slice());
         robot.mass_matrix(&mut self.data, &mut self.mass);
-        robot.inverse_dynamics(&mut self.data, self.qd.as_slice(), &vec![0.0; robot.dof()], &mut self.bias);
+        robot.inverse_dynamics(
+            &mut self.data,
+            self.qd.as_slice(),
+            &vec![0.0; robot.dof()],
+            &mut self.bias,
+        );
         robot.tool_jacobian(&self.data, &mut self.jacobian);
         let external = self.jacobian.transpose() * self.wrench_at_tool;
         for idx in 0..robot.dof() {

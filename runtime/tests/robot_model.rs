@@ -32,9 +32,7 @@ fn lwr4() -> Robot {
 /// Standard DH of the LWR IV (SOURCES.md): T_i = Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i), a_i = 0.
 fn dh_flange(q: &[f64]) -> Matrix4<f64> {
     use std::f64::consts::FRAC_PI_2;
-    let alpha = [
-        FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, 0.0,
-    ];
+    let alpha = [FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, 0.0];
     let d = [0.3105, 0.0, 0.4, 0.0, 0.39, 0.0, 0.078];
     let mut t = Matrix4::identity();
     for i in 0..7 {
@@ -128,14 +126,8 @@ fn jacobian_matches_finite_differences() {
             let angular = delta.scaled_axis() / (2.0 * h);
             let column = jacobian.column(j);
             for row in 0..3 {
-                assert!(
-                    (column[row] - linear[row]).abs() < 1e-7,
-                    "v row {row} joint {j}"
-                );
-                assert!(
-                    (column[row + 3] - angular[row]).abs() < 1e-7,
-                    "w row {row} joint {j}"
-                );
+                assert!((column[row] - linear[row]).abs() < 1e-7, "v row {row} joint {j}");
+                assert!((column[row + 3] - angular[row]).abs() < 1e-7, "w row {row} joint {j}");
             }
         }
     }
@@ -160,11 +152,7 @@ fn mass_matrix_is_symmetric_positive_definite_and_matches_kinetic_energy() {
         let mass = mass_matrix_at(&robot, &mut data, &q);
         assert!((&mass - mass.transpose()).abs().max() < 1e-14);
         let eigen = mass.clone().symmetric_eigen();
-        assert!(
-            eigen.eigenvalues.min() > 1e-5,
-            "eigenvalues {}",
-            eigen.eigenvalues
-        );
+        assert!(eigen.eigenvalues.min() > 1e-5, "eigenvalues {}", eigen.eigenvalues);
         // Independent check: kinetic energy from every link's centre-of-mass velocity.
         let mut energy = 0.0;
         for (link_idx, link) in robot.links().iter().enumerate() {
@@ -177,14 +165,10 @@ fn mass_matrix_is_symmetric_positive_definite_and_matches_kinetic_energy() {
             let w = twist.fixed_rows::<3>(3);
             let rot = robot.link_in_base_matrix(&data, link_idx).rotation;
             let inertia_base = rot.matrix() * link.inertial.inertia * rot.matrix().transpose();
-            energy +=
-                0.5 * link.inertial.mass * v.norm_squared() + 0.5 * w.dot(&(inertia_base * w));
+            energy += 0.5 * link.inertial.mass * v.norm_squared() + 0.5 * w.dot(&(inertia_base * w));
         }
         let from_matrix = 0.5 * qd.dot(&(&mass * &qd));
-        assert!(
-            (energy - from_matrix).abs() < 1e-12,
-            "{energy} vs {from_matrix}"
-        );
+        assert!((energy - from_matrix).abs() < 1e-12, "{energy} vs {from_matrix}");
     }
 }
 
@@ -205,8 +189,7 @@ fn newton_euler_equals_lagrangian_terms() {
         robot.inverse_dynamics(&mut data, qd.as_slice(), qdd.as_slice(), &mut tau);
         robot.gravity_torques(&mut data, &mut gravity);
         robot.coriolis_torques(&mut data, qd.as_slice(), &mut coriolis);
-        let sum =
-            &mass * &qdd + DVector::from_vec(coriolis.clone()) + DVector::from_vec(gravity.clone());
+        let sum = &mass * &qdd + DVector::from_vec(coriolis.clone()) + DVector::from_vec(gravity.clone());
         assert!((DVector::from_vec(tau) - sum).abs().max() < 1e-10);
         // Independent Coriolis check: C(q, q̇) q̇ = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q, Ṁ by finite differences.
         let mut mass_dot = DMatrix::zeros(7, 7);
@@ -216,9 +199,8 @@ fn newton_euler_equals_lagrangian_terms() {
             let mut minus = q.clone();
             plus[k] += h;
             minus[k] -= h;
-            let d_mass = (mass_matrix_at(&robot, &mut data, &plus)
-                - mass_matrix_at(&robot, &mut data, &minus))
-                / (2.0 * h);
+            let d_mass =
+                (mass_matrix_at(&robot, &mut data, &plus) - mass_matrix_at(&robot, &mut data, &minus)) / (2.0 * h);
             mass_dot += &d_mass * qd[k];
             energy_gradient[k] = 0.5 * qd.dot(&(&d_mass * &qd));
         }
@@ -244,8 +226,7 @@ fn newton_euler_equals_lagrangian_terms() {
 #[test]
 fn horizontal_arm_gravity_torque_at_a2() {
     let robot = lwr4();
-    let (_, _, gravity) =
-        robot.evaluate(&[0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let (_, _, gravity) = robot.evaluate(&[0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0]);
     // Reference without the probe: -48.1 N m (SOURCES.md); the 0.2 kg probe, its centre of mass
     // 0.4 + 0.39 + 0.078 + 0.05 m from A2, adds 0.2 * 9.81 * 0.918 N m. Axis A2 is -y, so the sign flips.
     let expected = -48.1 - 0.2 * 9.81 * 0.918;
@@ -283,4 +264,46 @@ fn prismatic_joint_dynamics_are_consistent() {
     assert!((mass[(0, 0)] - 3.0).abs() < 1e-12);
     // Arm about its joint: 0.01 + 1 * 0.2² kg m².
     assert!((mass[(1, 1)] - 0.05).abs() < 1e-12);
+}
+
+#[test]
+fn inspection_has_the_cli_json_keys() {
+    let robot = lwr4();
+    let q = [0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let inspection = robot.inspect(Some(&q)).expect("7 finite values");
+    let json = serde_json::to_value(&inspection).expect("serialisable");
+    let object = json.as_object().expect("one object");
+    let mut keys: Vec<&str> = object.keys().map(String::as_str).collect();
+    keys.sort_unstable();
+    assert_eq!(
+        keys,
+        [
+            "dof",
+            "gravity_torque",
+            "jacobian",
+            "joints",
+            "q",
+            "robot",
+            "tool_link",
+            "tool_position",
+            "tool_quaternion_wxyz"
+        ]
+    );
+    assert_eq!(json["jacobian"].as_array().map(Vec::len), Some(6));
+    assert_eq!(json["jacobian"][0].as_array().map(Vec::len), Some(7));
+    let joint_keys: Vec<&str> = json["joints"][0]
+        .as_object()
+        .expect("joint")
+        .keys()
+        .map(String::as_str)
+        .collect();
+    assert_eq!(joint_keys.len(), 6);
+    for key in ["name", "axis", "lower", "upper", "velocity", "effort"] {
+        assert!(joint_keys.contains(&key), "missing joint key {key}");
+    }
+    assert!(inspection.to_text().contains("lwr_a2_joint"));
+    assert!(matches!(
+        robot.inspect(Some(&[0.0; 3])),
+        Err(skill_runtime::robot::RobotError::WrongDof { .. })
+    ));
 }

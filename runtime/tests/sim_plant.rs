@@ -9,7 +9,9 @@ use skill_runtime::robot::{Robot, RobotData};
 use skill_runtime::sim::{RapierOptions, RapierPlant, Scene, SensorConfig};
 
 fn scene(name: &str) -> Scene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes").join(name);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/scenes")
+        .join(name);
     Scene::from_file(&path).expect("example scene loads")
 }
 
@@ -87,8 +89,12 @@ fn gravity_compensation_holds_the_arm_still() {
 fn press_on_table(force_n: f64, sensor: Option<SensorConfig>) -> (Vector6<f64>, Vector6<f64>) {
     let mut scene = scene("table.toml");
     if let Some(config) = sensor {
-        scene.set("sensor.noise_force_n", &config.noise_force_n.to_string()).expect("valid");
-        scene.set("sensor.cutoff_hz", &config.cutoff_hz.to_string()).expect("valid");
+        scene
+            .set("sensor.noise_force_n", &config.noise_force_n.to_string())
+            .expect("valid");
+        scene
+            .set("sensor.cutoff_hz", &config.cutoff_hz.to_string())
+            .expect("valid");
     }
     let mut plant = RapierPlant::from_scene(&scene).expect("scene builds");
     let mut press = Press::new(&plant.robot().clone());
@@ -128,7 +134,9 @@ fn pressing_on_table_reads_back_through_sensor_within_one_percent() {
 fn zero_torque_arm_falls_and_stops_at_limits() {
     let mut scene = scene("table.toml");
     scene.set("table.z", "-5").expect("valid z");
-    scene.set("robot.q0", "[0.0, 0.3, 0.0, 0.3, 0.0, 0.3, 0.0]").expect("valid q0");
+    scene
+        .set("robot.q0", "[0.0, 0.3, 0.0, 0.3, 0.0, 0.3, 0.0]")
+        .expect("valid q0");
     // Without any friction a 7-link pendulum never comes to rest: give the drives a little viscous
     // friction (0.5 N m s/rad, rapier's implicit joint damping) so "stops" is observable.
     let options = RapierOptions { joint_damping: 0.5 };
@@ -146,7 +154,10 @@ fn zero_torque_arm_falls_and_stops_at_limits() {
     let at_limit = (obs.q[1] - a2.upper).abs() < 0.05 || (obs.q[1] - a2.lower).abs() < 0.05;
     assert!(at_limit, "A2 at {} (limits {} .. {})", obs.q[1], a2.lower, a2.upper);
     for (idx, joint) in robot.joints().iter().enumerate() {
-        assert!(obs.q[idx] > joint.lower - 0.05 && obs.q[idx] < joint.upper + 0.05, "joint {idx} beyond its limit");
+        assert!(
+            obs.q[idx] > joint.lower - 0.05 && obs.q[idx] < joint.upper + 0.05,
+            "joint {idx} beyond its limit"
+        );
     }
     // After 8 s it has nearly stopped (|q̇| about 0.13 rad/s left on A3, gliding to rest).
     assert!(obs.qd.abs().max() < 0.3, "still moving: {:?}", obs.qd.as_slice());
@@ -204,5 +215,3 @@ fn button_goes_down_under_the_probe_and_springs_back() {
     let depth = plant.button_depth("button").expect("button exists");
     assert!(depth < 1e-3, "depth after release: {depth}");
 }
-
-

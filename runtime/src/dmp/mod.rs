@@ -41,7 +41,7 @@ mod trajectory;
 pub use self::basis::Basis;
 pub use self::canonical::CanonicalSystem;
 pub use self::force::{fit_force, fit_scalar};
-pub use self::quaternion::{QuatDmp, QuatRollout};
+pub use self::quaternion::{quat_error, QuatDmp, QuatRollout};
 pub use self::rollout::DmpRollout;
 pub use self::trajectory::Dmp;
 

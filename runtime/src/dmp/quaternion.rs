@@ -18,7 +18,7 @@ use super::fit::{derivatives, fit_weights};
 use super::{check_times, DmpConfig, DmpError};
 
 /// `δ(q₁, q₂) = 2 log(q₂ ∗ q̄₁)`: the rotation vector taking `q₁` to `q₂` (base frame).
-pub(crate) fn quat_error(q1: &UnitQuaternion<f64>, q2: &UnitQuaternion<f64>) -> Vector3<f64> {
+pub fn quat_error(q1: &UnitQuaternion<f64>, q2: &UnitQuaternion<f64>) -> Vector3<f64> {
     (q2 * q1.inverse()).scaled_axis()
 }
 
@@ -42,11 +42,7 @@ pub struct QuatDmp {
 impl QuatDmp {
     /// Learns an orientation DMP from unit quaternions sampled at times `t_s` (any spacing; the
     /// quaternions need not be sign-continuous, the log map takes the shorter way).
-    pub fn fit(
-        config: &DmpConfig,
-        t_s: &[f64],
-        orientation: &[UnitQuaternion<f64>],
-    ) -> Result<Self, DmpError> {
+    pub fn fit(config: &DmpConfig, t_s: &[f64], orientation: &[UnitQuaternion<f64>]) -> Result<Self, DmpError> {
         config.validate()?;
         check_times(t_s, "orientation")?;
         if orientation.len() != t_s.len() {
@@ -56,10 +52,7 @@ impl QuatDmp {
                 found: orientation.len(),
             });
         }
-        if let Some(index) = orientation
-            .iter()
-            .position(|q| !q.coords.iter().all(|c| c.is_finite()))
-        {
+        if let Some(index) = orientation.iter().position(|q| !q.coords.iter().all(|c| c.is_finite())) {
             return Err(DmpError::NonFinite {
                 what: "orientation",
                 index,
@@ -94,14 +87,10 @@ impl QuatDmp {
         let (mut w_axis, mut dw, mut unused) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let errors: Vec<Vector3<f64>> = orientation.iter().map(|q| quat_error(q, &goal)).collect();
         for axis in 0..3 {
-            w_axis
-                .iter_mut()
-                .zip(&omega)
-                .for_each(|(dst, w)| *dst = w[axis]);
+            w_axis.iter_mut().zip(&omega).for_each(|(dst, w)| *dst = w[axis]);
             derivatives(&times, &w_axis, &mut dw, &mut unused);
             for idx in 0..n {
-                targets[axis][idx] = (tau * tau * dw[idx] + d_gain * tau * w_axis[idx]) / k_gain
-                    - errors[idx][axis]
+                targets[axis][idx] = (tau * tau * dw[idx] + d_gain * tau * w_axis[idx]) / k_gain - errors[idx][axis]
                     + start_error[axis] * phases[idx];
             }
         }

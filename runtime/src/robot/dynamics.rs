@@ -69,14 +69,7 @@ impl Robot {
     }
 
     /// Recursive Newton-Euler in body frames (Luh, Walker, Paul), gravity optional.
-    fn rnea(
-        &self,
-        data: &mut RobotData,
-        qd: &[f64],
-        qdd: &[f64],
-        with_gravity: bool,
-        out: &mut [f64],
-    ) {
+    fn rnea(&self, data: &mut RobotData, qd: &[f64], qdd: &[f64], with_gravity: bool, out: &mut [f64]) {
         let n = self.dof();
         debug_assert!(data.kinematics_done, "call forward_kinematics first");
         assert!(
@@ -86,16 +79,11 @@ impl Robot {
         let mut omega_prev = Vector3::zeros();
         let mut omega_dot_prev = Vector3::zeros();
         // The base accelerates upwards at g: gravity enters as a fictitious base acceleration.
-        let mut acc_prev = if with_gravity {
-            -self.gravity
-        } else {
-            Vector3::zeros()
-        };
+        let mut acc_prev = if with_gravity { -self.gravity } else { Vector3::zeros() };
         for (idx, body) in self.bodies.iter().enumerate() {
             let rot_t = data.local_rot[idx].transpose();
             let pos = &data.local_pos[idx];
-            let acc = rot_t
-                * (acc_prev + omega_dot_prev.cross(pos) + omega_prev.cross(&omega_prev.cross(pos)));
+            let acc = rot_t * (acc_prev + omega_dot_prev.cross(pos) + omega_prev.cross(&omega_prev.cross(pos)));
             let omega_in = rot_t * omega_prev;
             let omega_dot_in = rot_t * omega_dot_prev;
             let (omega, omega_dot, acc) = match body.kind {
@@ -120,8 +108,7 @@ impl Robot {
             let force = acc_com * body.mass;
             let inertia_omega = body.inertia * omega;
             data.force[idx] = force;
-            data.moment[idx] =
-                body.inertia * omega_dot + omega.cross(&inertia_omega) + body.com.cross(&force);
+            data.moment[idx] = body.inertia * omega_dot + omega.cross(&inertia_omega) + body.com.cross(&force);
             data.omega[idx] = omega;
             data.omega_dot[idx] = omega_dot;
             omega_prev = omega;

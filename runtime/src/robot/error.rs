@@ -47,9 +47,7 @@ pub enum RobotError {
         link: String,
     },
     /// Not exactly one link without a parent.
-    #[error(
-        "expected exactly one root link (a link that is no joint's child), found {count}: {roots}"
-    )]
+    #[error("expected exactly one root link (a link that is no joint's child), found {count}: {roots}")]
     Roots {
         /// How many there were.
         count: usize,
@@ -117,9 +115,7 @@ pub enum RobotError {
         eigenvalues: String,
     },
     /// A movable joint that moves no mass at all: the dynamics would be singular.
-    #[error(
-        "joint `{joint}` moves no mass: link `{link}` needs an `<inertial>` with a positive mass"
-    )]
+    #[error("joint `{joint}` moves no mass: link `{link}` needs an `<inertial>` with a positive mass")]
     MissingInertial {
         /// The joint.
         joint: String,
@@ -127,7 +123,7 @@ pub enum RobotError {
         link: String,
     },
     /// A NaN or infinite number where a finite one is needed.
-    #[error("`{item}` is not a finite number")]
+    #[error("non-finite number in `{item}`")]
     NonFinite {
         /// What it was (`joint a1 origin`, `link l1 mass`, …).
         item: String,

@@ -1,8 +1,7 @@
 //! Forward kinematics and Jacobians, computed into a preallocated [`RobotData`] workspace.
 
 use nalgebra::{
-    DVector, Isometry3, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3,
-    UnitQuaternion, Vector3,
+    DVector, Isometry3, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, UnitQuaternion, Vector3,
 };
 
 use super::{JointKind, Robot};
@@ -97,10 +96,7 @@ impl Robot {
     /// The pose of link `link` in the base frame.
     pub fn link_in_base(&self, data: &RobotData, link: usize) -> Isometry3<f64> {
         let pose = self.link_in_base_matrix(data, link);
-        Isometry3::from_parts(
-            pose.translation,
-            UnitQuaternion::from_rotation_matrix(&pose.rotation),
-        )
+        Isometry3::from_parts(pose.translation, UnitQuaternion::from_rotation_matrix(&pose.rotation))
     }
 
     /// The tool link's pose in the base frame.
@@ -121,13 +117,7 @@ impl Robot {
     ///
     /// # Panics
     /// If `out` does not have one column per joint.
-    pub fn link_jacobian(
-        &self,
-        data: &RobotData,
-        link: usize,
-        point_in_link: &Vector3<f64>,
-        out: &mut Matrix6xX<f64>,
-    ) {
+    pub fn link_jacobian(&self, data: &RobotData, link: usize, point_in_link: &Vector3<f64>, out: &mut Matrix6xX<f64>) {
         debug_assert!(data.kinematics_done, "call forward_kinematics first");
         assert_eq!(out.ncols(), self.dof(), "jacobian must have dof columns");
         out.fill(0.0);

@@ -17,10 +17,12 @@
 
 mod dynamics;
 mod error;
+mod inspect;
 mod kinematics;
 mod model;
 
 pub use error::RobotError;
+pub use inspect::{Inspection, JointSummary};
 pub use kinematics::RobotData;
 pub use model::{Collision, Inertial, JointInfo, JointKind, LinkInfo, Robot, Shape};
 

@@ -3,9 +3,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use nalgebra::{
-    Isometry3, IsometryMatrix3, Matrix3, Rotation3, SymmetricEigen, Translation3, Vector3,
-};
+use nalgebra::{Isometry3, IsometryMatrix3, Matrix3, Rotation3, SymmetricEigen, Translation3, Vector3};
 
 use super::RobotError;
 
@@ -162,11 +160,7 @@ impl Robot {
         Self::from_urdf_named(text, "<string>", tool_link)
     }
 
-    fn from_urdf_named(
-        text: &str,
-        file: &str,
-        tool_link: Option<&str>,
-    ) -> Result<Robot, RobotError> {
+    fn from_urdf_named(text: &str, file: &str, tool_link: Option<&str>) -> Result<Robot, RobotError> {
         let urdf = urdf_rs::read_from_string(text).map_err(|err| RobotError::Urdf {
             file: file.to_owned(),
             message: err.to_string().replace('\n', " "),
@@ -270,10 +264,7 @@ fn finite(values: &[f64], item: impl FnOnce() -> String) -> Result<(), RobotErro
     }
 }
 
-fn pose(
-    origin: &urdf_rs::Pose,
-    item: impl Fn() -> String,
-) -> Result<IsometryMatrix3<f64>, RobotError> {
+fn pose(origin: &urdf_rs::Pose, item: impl Fn() -> String) -> Result<IsometryMatrix3<f64>, RobotError> {
     let [x, y, z] = origin.xyz.0;
     let [roll, pitch, yaw] = origin.rpy.0;
     finite(&[x, y, z, roll, pitch, yaw], item)?;
@@ -292,9 +283,7 @@ fn to_quaternion_pose(iso: &IsometryMatrix3<f64>) -> Isometry3<f64> {
 
 fn inertial(link: &urdf_rs::Link) -> Result<(Inertial, IsometryMatrix3<f64>), RobotError> {
     let urdf_inertial = &link.inertial;
-    let frame = pose(&urdf_inertial.origin, || {
-        format!("link {} inertial origin", link.name)
-    })?;
+    let frame = pose(&urdf_inertial.origin, || format!("link {} inertial origin", link.name))?;
     let mass = urdf_inertial.mass.value;
     let i = &urdf_inertial.inertia;
     finite(&[mass, i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz], || {
@@ -306,9 +295,7 @@ fn inertial(link: &urdf_rs::Link) -> Result<(Inertial, IsometryMatrix3<f64>), Ro
             mass,
         });
     }
-    let in_frame = Matrix3::new(
-        i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
-    );
+    let in_frame = Matrix3::new(i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz);
     if mass == 0.0 {
         if in_frame.iter().any(|v| *v != 0.0) {
             return Err(RobotError::ZeroMass {
@@ -454,8 +441,7 @@ fn lump(body: &mut Body, inertial: &Inertial, link_in_body: &IsometryMatrix3<f64
         let d = at - new_com;
         inertia + mass * (Matrix3::identity() * d.dot(&d) - d * d.transpose())
     };
-    body.inertia =
-        shift(body.mass, body.inertia, body.com) + shift(inertial.mass, inertia, com.coords);
+    body.inertia = shift(body.mass, body.inertia, body.com) + shift(inertial.mass, inertia, com.coords);
     body.com = new_com;
     body.mass = total;
 }
@@ -471,13 +457,10 @@ fn build(urdf: &urdf_rs::Robot, tool_link: Option<&str>) -> Result<Robot, RobotE
     let mut child_joints: Vec<Vec<usize>> = vec![Vec::new(); urdf.links.len()];
     for (joint_idx, joint) in urdf.joints.iter().enumerate() {
         let find = |name: &str| {
-            link_idx
-                .get(name)
-                .copied()
-                .ok_or_else(|| RobotError::JointLinkMissing {
-                    joint: joint.name.clone(),
-                    link: name.to_owned(),
-                })
+            link_idx.get(name).copied().ok_or_else(|| RobotError::JointLinkMissing {
+                joint: joint.name.clone(),
+                link: name.to_owned(),
+            })
         };
         let parent = find(&joint.parent.link)?;
         let child = find(&joint.child.link)?;
@@ -536,9 +519,7 @@ fn build(urdf: &urdf_rs::Robot, tool_link: Option<&str>) -> Result<Robot, RobotE
         let urdf_link = &urdf.links[*urdf_link_idx];
         if let Some(joint_idx) = via[link_idx_in_chain] {
             let urdf_joint = &urdf.joints[joint_idx];
-            let origin = pose(&urdf_joint.origin, || {
-                format!("joint {} origin", urdf_joint.name)
-            })?;
+            let origin = pose(&urdf_joint.origin, || format!("joint {} origin", urdf_joint.name))?;
             match joint_info(urdf_joint)? {
                 None => link_in_body *= origin,
                 Some(info) => {

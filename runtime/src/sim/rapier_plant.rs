@@ -2,14 +2,13 @@
 //! the wrist sensor. The only file that touches rapier's (glam) types.
 
 use nalgebra::{DVector, Isometry3, IsometryMatrix3, Matrix3, UnitQuaternion, Vector3, Vector6};
-use rapier3d::prelude::{
-    CCDSolver, CoefficientCombineRule, ColliderBuilder, ColliderHandle, ColliderSet,
-    DefaultBroadPhase, GenericJointBuilder, Group, ImpulseJointSet, IntegrationParameters,
-    InteractionGroups, InteractionTestMode, IslandManager, JointAxesMask, JointAxis,
-    MassProperties, MultibodyJointHandle, MultibodyJointSet, NarrowPhase, PairContacts,
-    PhysicsPipeline, RigidBodyBuilder, RigidBodyHandle, RigidBodySet, SoftBodySet,
-};
 use rapier3d::math::{Pose, Rotation, Vector};
+use rapier3d::prelude::{
+    CCDSolver, CoefficientCombineRule, ColliderBuilder, ColliderHandle, ColliderSet, DefaultBroadPhase,
+    GenericJointBuilder, Group, ImpulseJointSet, IntegrationParameters, InteractionGroups, InteractionTestMode,
+    IslandManager, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle, MultibodyJointSet, NarrowPhase,
+    PairContacts, PhysicsPipeline, RigidBodyBuilder, RigidBodyHandle, RigidBodySet, SoftBodySet,
+};
 
 use super::{ObjectKind, Scene, SceneError, SensorConfig, WristSensor};
 use crate::plant::{saturate, Observation, Plant, PlantError};
@@ -122,7 +121,10 @@ fn pose_of(iso: &IsometryMatrix3<f64>) -> Pose {
 }
 
 fn pose_of_quat(iso: &Isometry3<f64>) -> Pose {
-    pose_of(&IsometryMatrix3::from_parts(iso.translation, iso.rotation.to_rotation_matrix()))
+    pose_of(&IsometryMatrix3::from_parts(
+        iso.translation,
+        iso.rotation.to_rotation_matrix(),
+    ))
 }
 
 fn iso_of(pose: &Pose) -> IsometryMatrix3<f64> {
@@ -306,16 +308,11 @@ impl RapierPlant {
         for link in &robot.links()[sensor_link..] {
             let Some(body) = link.body else { continue };
             for collision in &link.collisions {
-                let shape_in_body = pose_of(&link.link_in_body)
-                    * pose_of_quat(&collision.shape_in_link);
+                let shape_in_body = pose_of(&link.link_in_body) * pose_of_quat(&collision.shape_in_link);
                 let (builder, shape_pose) = match collision.shape {
                     Shape::Sphere { radius } => (ColliderBuilder::ball(radius as f32), shape_in_body),
                     Shape::Cuboid { size } => (
-                        ColliderBuilder::cuboid(
-                            size.x as f32 / 2.0,
-                            size.y as f32 / 2.0,
-                            size.z as f32 / 2.0,
-                        ),
+                        ColliderBuilder::cuboid(size.x as f32 / 2.0, size.y as f32 / 2.0, size.z as f32 / 2.0),
                         shape_in_body,
                     ),
                     Shape::Cylinder { radius, length } => (
@@ -338,9 +335,9 @@ impl RapierPlant {
                         SCENE_GROUP,
                         InteractionTestMode::And,
                     ));
-                let handle =
-                    self.colliders
-                        .insert_with_parent(collider, self.links[body], &mut self.bodies);
+                let handle = self
+                    .colliders
+                    .insert_with_parent(collider, self.links[body], &mut self.bodies);
                 self.tool_colliders.push(handle);
             }
         }
@@ -494,7 +491,9 @@ impl RapierPlant {
             }
         }
         for (idx, body) in self.robot.bodies.iter().enumerate() {
-            let Some(rb) = self.bodies.get(self.links[idx]) else { continue };
+            let Some(rb) = self.bodies.get(self.links[idx]) else {
+                continue;
+            };
             let axis_world = rb.position().rotation * vec3(&body.axis);
             let moment = axis_world * self.torque[idx] as f32;
             if let Some(rb) = self.bodies.get_mut(self.links[idx]) {
@@ -507,7 +506,9 @@ impl RapierPlant {
             }
         }
         for button in &self.buttons {
-            let Some((multibody, link_id)) = self.multibody_joints.get(button.joint) else { continue };
+            let Some((multibody, link_id)) = self.multibody_joints.get(button.joint) else {
+                continue;
+            };
             let Some(link) = multibody.link(link_id) else { continue };
             let depth = -f64::from(link.joint.coords()[0]);
             let speed = multibody
@@ -536,9 +537,13 @@ impl RapierPlant {
         let mut moment = Vector3::zeros();
         for tool in &self.tool_colliders {
             for pair in self.narrow_phase.contact_pairs_with(*tool) {
-                let PairContacts::Rigid(rigid) = &pair.contacts else { continue };
+                let PairContacts::Rigid(rigid) = &pair.contacts else {
+                    continue;
+                };
                 let tool_is_first = pair.collider1 == *tool;
-                let Some(tool_collider) = self.colliders.get(*tool) else { continue };
+                let Some(tool_collider) = self.colliders.get(*tool) else {
+                    continue;
+                };
                 let tool_pose = tool_collider.position();
                 for manifold in rigid.solver_manifolds() {
                     let normal = from_vec3(manifold.data.normal);
@@ -584,7 +589,9 @@ impl Plant for RapierPlant {
         out.t = self.t;
         if let Some((multibody, _)) = self.multibody_joints.get(self.joints[0]) {
             for (idx, handle) in self.joints.iter().enumerate() {
-                let Some((_, link_id)) = self.multibody_joints.get(*handle) else { continue };
+                let Some((_, link_id)) = self.multibody_joints.get(*handle) else {
+                    continue;
+                };
                 let Some(link) = multibody.link(link_id) else { continue };
                 out.q[idx] = f64::from(link.joint.coords()[3]);
                 out.qd[idx] = multibody

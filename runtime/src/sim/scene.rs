@@ -356,10 +356,13 @@ fn set_in_value(target: &mut toml::Value, path: &[String], value: toml::Value) -
 }
 
 fn typed(raw: &toml::Table, file: &str) -> Result<SceneSpec, SceneError> {
-    let spec: SceneSpec = raw.clone().try_into().map_err(|err: toml::de::Error| SceneError::Syntax {
-        file: file.to_owned(),
-        message: one_line(&err.to_string()),
-    })?;
+    let spec: SceneSpec = raw
+        .clone()
+        .try_into()
+        .map_err(|err: toml::de::Error| SceneError::Syntax {
+            file: file.to_owned(),
+            message: one_line(&err.to_string()),
+        })?;
     validate(&spec, file)?;
     Ok(spec)
 }
@@ -372,10 +375,18 @@ fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
         reason: reason.to_owned(),
     };
     if !(spec.sim.dt > 0.0 && spec.sim.dt <= 0.01) {
-        return Err(invalid("sim.dt".into(), spec.sim.dt.to_string(), "the step must be in (0, 0.01] s"));
+        return Err(invalid(
+            "sim.dt".into(),
+            spec.sim.dt.to_string(),
+            "the step must be in (0, 0.01] s",
+        ));
     }
     if spec.sim.gravity.iter().any(|g| !g.is_finite()) {
-        return Err(invalid("sim.gravity".into(), format!("{:?}", spec.sim.gravity), "must be finite"));
+        return Err(invalid(
+            "sim.gravity".into(),
+            format!("{:?}", spec.sim.gravity),
+            "must be finite",
+        ));
     }
     let sensor = &spec.sensor;
     if !(sensor.noise_force_n >= 0.0 && sensor.noise_torque_nm >= 0.0) {
@@ -386,7 +397,11 @@ fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
         ));
     }
     if !sensor.cutoff_hz.is_finite() || sensor.bias.iter().any(|b| !b.is_finite()) {
-        return Err(invalid("sensor".into(), format!("{sensor:?}"), "cutoff and bias must be finite"));
+        return Err(invalid(
+            "sensor".into(),
+            format!("{sensor:?}"),
+            "cutoff and bias must be finite",
+        ));
     }
     if let Some(q0) = &spec.robot.q0 {
         if q0.iter().any(|q| !q.is_finite()) {
@@ -396,21 +411,35 @@ fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
     for (name, object) in &spec.objects {
         let key = |field: &str| format!("{name}.{field}");
         if object.xyz.iter().chain(&object.rpy).any(|v| !v.is_finite()) {
-            return Err(invalid(key("xyz"), format!("{:?} {:?}", object.xyz, object.rpy), "pose must be finite"));
+            return Err(invalid(
+                key("xyz"),
+                format!("{:?} {:?}", object.xyz, object.rpy),
+                "pose must be finite",
+            ));
         }
         if !(object.friction >= 0.0 && object.friction.is_finite()) {
-            return Err(invalid(key("friction"), object.friction.to_string(), "must be zero or positive"));
+            return Err(invalid(
+                key("friction"),
+                object.friction.to_string(),
+                "must be zero or positive",
+            ));
         }
         let positive = |field: &str, value: Option<f64>| -> Result<f64, SceneError> {
             match value {
-                None => Err(invalid(key(field), "(missing)".into(), &format!("a {:?} needs `{field}`", object.kind).to_lowercase())),
+                None => Err(invalid(
+                    key(field),
+                    "(missing)".into(),
+                    &format!("a {:?} needs `{field}`", object.kind).to_lowercase(),
+                )),
                 Some(v) if v > 0.0 && v.is_finite() => Ok(v),
                 Some(v) => Err(invalid(key(field), v.to_string(), "must be positive")),
             }
         };
         match object.kind {
             ObjectKind::Box => {
-                let size = object.size.ok_or_else(|| invalid(key("size"), "(missing)".into(), "a box needs `size`"))?;
+                let size = object
+                    .size
+                    .ok_or_else(|| invalid(key("size"), "(missing)".into(), "a box needs `size`"))?;
                 if size.iter().any(|s| !(*s > 0.0 && s.is_finite())) {
                     return Err(invalid(key("size"), format!("{size:?}"), "extents must be positive"));
                 }
@@ -428,7 +457,11 @@ fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
                 let preload = object.preload_n.unwrap_or(0.0);
                 let damping = object.damping.unwrap_or(0.0);
                 if !(preload >= 0.0 && damping >= 0.0) {
-                    return Err(invalid(key("preload_n"), format!("{preload} / {damping}"), "preload and damping must be zero or positive"));
+                    return Err(invalid(
+                        key("preload_n"),
+                        format!("{preload} / {damping}"),
+                        "preload and damping must be zero or positive",
+                    ));
                 }
             }
         }

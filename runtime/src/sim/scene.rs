@@ -271,7 +271,7 @@ impl Scene {
             path.push(idx.to_string());
         }
         let mut new_value = parse_value(value);
-        if !path.last().is_some_and(|seg| seg == "seed") {
+        if path.last().is_none_or(|seg| seg != "seed") {
             floats_in_value(&mut new_value);
         }
         let mut raw = self.raw.clone();

@@ -210,8 +210,8 @@ pub fn force_aligned_frame_at(
     };
     let found = (0..=index)
         .rev()
-        .find_map(|k| valid(k))
-        .or_else(|| (index + 1..force_n.len()).find_map(|k| valid(k)));
+        .find_map(valid)
+        .or_else(|| (index + 1..force_n.len()).find_map(valid));
     match found {
         Some(applied) => Ok(CompliantFrame::z_aligned(position_m[index], &applied)),
         None => {

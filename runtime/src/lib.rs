@@ -6,3 +6,4 @@ pub mod dmp;
 pub mod plant;
 pub mod sim;
 pub mod learn;
+pub mod control;

@@ -1,0 +1,437 @@
+//! The hybrid control law, evaluated once per tick without allocation.
+
+use nalgebra::{DVector, Isometry3, Matrix6, Matrix6xX, UnitQuaternion, Vector3, Vector6};
+
+use super::adjoint;
+use crate::plant::Observation;
+use crate::robot::{Robot, RobotData, RobotError};
+
+/// Gains of the controller that do not come from the skill (the skill gives `K`, `S` and the
+/// force gains per state). Defaults are tuned for the LWR-IV at 1 kHz.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControllerGains {
+    /// Damping ratio of the position-controlled axes: `D = 2 ζ √(K m)`.
+    pub damping_ratio: f64,
+    /// Nominal effective mass for translational damping [kg].
+    pub effective_mass_kg: f64,
+    /// Nominal effective inertia for rotational damping [kg m²].
+    pub effective_inertia_kgm2: f64,
+    /// Upper bound of the rotational damping [N m s/rad]. The LWR-IV's wrist joint has an
+    /// inertia near 8e-4 kg m², so explicit damping above about 1.6 N m s/rad at 1 kHz is unstable.
+    pub max_rotational_damping: f64,
+    /// Damping of force-controlled translations [N s/m]: bounds the speed of free motion under
+    /// a force command to `f / d`.
+    pub force_axis_damping: f64,
+    /// Damping of force-controlled rotations [N m s/rad].
+    pub force_axis_rotational_damping: f64,
+    /// Null-space posture stiffness [N m/rad].
+    pub nullspace_stiffness: f64,
+    /// Null-space posture damping [N m s/rad].
+    pub nullspace_damping: f64,
+    /// Fraction of each joint's velocity limit above which braking starts.
+    pub velocity_limit_fraction: f64,
+    /// Braking gain on the excess joint velocity [N m s/rad].
+    pub velocity_brake_gain: f64,
+}
+
+impl Default for ControllerGains {
+    fn default() -> Self {
+        ControllerGains {
+            damping_ratio: 0.8,
+            effective_mass_kg: 2.5,
+            effective_inertia_kgm2: 0.003,
+            max_rotational_damping: 1.0,
+            force_axis_damping: 40.0,
+            force_axis_rotational_damping: 0.5,
+            nullspace_stiffness: 10.0,
+            nullspace_damping: 0.5,
+            velocity_limit_fraction: 0.9,
+            velocity_brake_gain: 1.0,
+        }
+    }
+}
+
+/// What the controller is asked to do this tick. Everything in the robot base frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Command {
+    /// Desired tool pose.
+    pub pose: Isometry3<f64>,
+    /// Desired tool twist `[v; ω]` (feed-forward on position axes; zero to hold).
+    pub twist: Vector6<f64>,
+    /// Desired applied wrench `[f; m]` at the tool point (used on force-controlled axes).
+    pub wrench: Vector6<f64>,
+    /// The compliant frame in which `position` and `stiffness` are given.
+    pub frame: Isometry3<f64>,
+    /// Per compliant-frame axis: position-controlled (`true`) or force-controlled.
+    pub position: [bool; 6],
+    /// Stiffness per compliant-frame axis: N/m, N m/rad.
+    pub stiffness: [f64; 6],
+    /// Proportional force gain [-].
+    pub kp: f64,
+    /// Integral force gain [1/s].
+    pub ki: f64,
+    /// Clamp of each integral component [N or N m]; `None` leaves it unbounded.
+    pub integral_limit: Option<f64>,
+}
+
+impl Command {
+    /// Holds `pose` with all axes position-controlled at `stiffness`, in the base frame.
+    pub fn hold(pose: Isometry3<f64>, stiffness: [f64; 6]) -> Self {
+        Command {
+            pose,
+            twist: Vector6::zeros(),
+            wrench: Vector6::zeros(),
+            frame: Isometry3::identity(),
+            position: [true; 6],
+            stiffness,
+            kp: 0.0,
+            ki: 0.0,
+            integral_limit: None,
+        }
+    }
+}
+
+/// What the controller measured this tick (base frame, at the tool point).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlState {
+    /// Tool pose.
+    pub tool: Isometry3<f64>,
+    /// Tool twist `[v; ω]`.
+    pub twist: Vector6<f64>,
+    /// The wrench the robot applies `[f; m]`, about the tool point, sensor bias removed.
+    pub applied: Vector6<f64>,
+}
+
+/// The hybrid controller with its preallocated workspace.
+#[derive(Debug, Clone)]
+pub struct HybridController {
+    robot: Robot,
+    data: RobotData,
+    sensor_link: usize,
+    gains: ControllerGains,
+    q_rest: DVector<f64>,
+    jacobian: Matrix6xX<f64>,
+    gravity: DVector<f64>,
+    torques: DVector<f64>,
+    task_torques: DVector<f64>,
+    posture: DVector<f64>,
+    integral_cf: Vector6<f64>,
+    bias_sensor: Vector6<f64>,
+    state: ControlState,
+}
+
+impl HybridController {
+    /// A controller for `robot`, reading the wrist sensor at `sensor_link`, with the null space
+    /// pulled towards `q_rest`.
+    pub fn new(robot: Robot, sensor_link: &str, q_rest: &[f64], gains: ControllerGains) -> Result<Self, RobotError> {
+        robot.check_dof(q_rest.len())?;
+        let sensor_link = robot.require_link(sensor_link)?;
+        let n = robot.dof();
+        let data = robot.data();
+        Ok(HybridController {
+            data,
+            sensor_link,
+            gains,
+            q_rest: DVector::from_column_slice(q_rest),
+            jacobian: Matrix6xX::zeros(n),
+            gravity: DVector::zeros(n),
+            torques: DVector::zeros(n),
+            task_torques: DVector::zeros(n),
+            posture: DVector::zeros(n),
+            integral_cf: Vector6::zeros(),
+            bias_sensor: Vector6::zeros(),
+            state: ControlState { tool: Isometry3::identity(), twist: Vector6::zeros(), applied: Vector6::zeros() },
+            robot,
+        })
+    }
+
+    /// The robot model the controller uses.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// The gains.
+    pub fn gains(&self) -> &ControllerGains {
+        &self.gains
+    }
+
+    /// What the last [`HybridController::observe`] measured.
+    pub fn state(&self) -> &ControlState {
+        &self.state
+    }
+
+    /// The integral term in compliant-frame coordinates (for logs and tests).
+    pub fn integral(&self) -> &Vector6<f64> {
+        &self.integral_cf
+    }
+
+    /// Zeroes the force integral (entry action `reset_integral`).
+    pub fn reset_integral(&mut self) {
+        self.integral_cf = Vector6::zeros();
+    }
+
+    /// Takes the current sensor reading as its zero (entry action `tare`).
+    pub fn tare(&mut self, obs: &Observation) {
+        self.bias_sensor = obs.wrench_base;
+    }
+
+    /// Kinematics, twist and applied wrench at the tool point for this observation. Call once per
+    /// tick before [`HybridController::torques`]; guards read [`HybridController::state`].
+    pub fn observe(&mut self, obs: &Observation) -> &ControlState {
+        self.robot.forward_kinematics(&mut self.data, obs.q.as_slice());
+        self.robot.tool_jacobian(&self.data, &mut self.jacobian);
+        let tool = self.robot.tool_in_base(&self.data);
+        let sensor = self.robot.link_in_base(&self.data, self.sensor_link);
+        let twist = &self.jacobian * &obs.qd;
+        // The sensor measures the environment's wrench on the tool about the sensor origin
+        // (base axes); the robot applies its negative. Move the moment to the tool point.
+        let measured = obs.wrench_base - self.bias_sensor;
+        let force = measured.fixed_rows::<3>(0).into_owned();
+        let moment_sensor = measured.fixed_rows::<3>(3).into_owned();
+        let lever = sensor.translation.vector - tool.translation.vector;
+        let moment_tool = moment_sensor + lever.cross(&force);
+        let mut applied = Vector6::zeros();
+        applied.fixed_rows_mut::<3>(0).copy_from(&(-force));
+        applied.fixed_rows_mut::<3>(3).copy_from(&(-moment_tool));
+        self.state = ControlState { tool, twist: Vector6::from_iterator(twist.iter().copied()), applied };
+        &self.state
+    }
+
+    /// The Cartesian wrench of the hybrid law at the tool point, base frame, and the integral
+    /// update. Depends only on Cartesian quantities, so it is testable without a robot.
+    pub fn cartesian_wrench(
+        gains: &ControllerGains,
+        state: &ControlState,
+        cmd: &Command,
+        integral_cf: &mut Vector6<f64>,
+        dt: f64,
+    ) -> Vector6<f64> {
+        // The compliant frame relative to the control frame (tool point, base axes).
+        let frame_in_control = Isometry3::from_parts(
+            (cmd.frame.translation.vector - state.tool.translation.vector).into(),
+            cmd.frame.rotation,
+        );
+        let (omega, omega_tilde) = adjoint::operators(&frame_in_control, &cmd.position, &cmd.stiffness);
+        let ad = adjoint::adjoint(&frame_in_control);
+        let ad_inv = adjoint::adjoint_inverse(&frame_in_control);
+        let adg = ad_inv.transpose();
+        let adg_inv = ad.transpose();
+
+        // Pose error: position difference and the rotation vector of q_d q⁻¹ (shortest way).
+        let mut e_p = Vector6::zeros();
+        e_p.fixed_rows_mut::<3>(0)
+            .copy_from(&(cmd.pose.translation.vector - state.tool.translation.vector));
+        e_p.fixed_rows_mut::<3>(3).copy_from(&rotation_error(&cmd.pose.rotation, &state.tool.rotation));
+
+        // Damping in the compliant frame, moved to the control frame like the stiffness.
+        let mut d_cf = Matrix6::zeros();
+        let mut s = Matrix6::zeros();
+        for axis in 0..6 {
+            let rotation = axis >= 3;
+            d_cf[(axis, axis)] = if cmd.position[axis] {
+                let mass = if rotation { gains.effective_inertia_kgm2 } else { gains.effective_mass_kg };
+                let d = 2.0 * gains.damping_ratio * (cmd.stiffness[axis].max(0.0) * mass).sqrt();
+                if rotation {
+                    d.min(gains.max_rotational_damping)
+                } else {
+                    d
+                }
+            } else if rotation {
+                gains.force_axis_rotational_damping
+            } else {
+                gains.force_axis_damping
+            };
+            if cmd.position[axis] {
+                s[(axis, axis)] = 1.0;
+            }
+        }
+        let damping = adg * d_cf * ad_inv;
+        let twist_selected = ad * s * ad_inv * cmd.twist;
+
+        // Force error and the saturated integral, kept in compliant-frame coordinates.
+        let e_f = cmd.wrench - state.applied;
+        let e_f_cf = adg_inv * e_f;
+        for axis in 0..6 {
+            if cmd.position[axis] {
+                integral_cf[axis] = 0.0;
+            } else {
+                let mut value = integral_cf[axis] + e_f_cf[axis] * dt;
+                if let Some(limit) = cmd.integral_limit {
+                    // The integral term is k_i ∫: clamp the term, not the raw integral.
+                    if cmd.ki > 0.0 {
+                        let bound = limit / cmd.ki;
+                        value = value.clamp(-bound, bound);
+                    }
+                }
+                integral_cf[axis] = value;
+            }
+        }
+        let integral_term = adg * (*integral_cf * cmd.ki);
+
+        omega * e_p - damping * (state.twist - twist_selected)
+            + omega_tilde * cmd.wrench
+            + omega_tilde * e_f * cmd.kp
+            + integral_term
+    }
+
+    /// Joint torques for this tick (after [`HybridController::observe`] on the same observation).
+    pub fn torques(&mut self, obs: &Observation, cmd: &Command, dt: f64) -> &[f64] {
+        let wrench = Self::cartesian_wrench(&self.gains, &self.state, cmd, &mut self.integral_cf, dt);
+        self.robot.gravity_torques(&mut self.data, self.gravity.as_mut_slice());
+        self.task_torques.gemv_tr(1.0, &self.jacobian, &wrench, 0.0);
+
+        // Null space: N = I − Jᵀ (J Jᵀ + λ² I)⁻¹ J applied to the posture torque.
+        for i in 0..self.posture.len() {
+            self.posture[i] = -self.gains.nullspace_stiffness * (obs.q[i] - self.q_rest[i])
+                - self.gains.nullspace_damping * obs.qd[i];
+        }
+        let jjt = &self.jacobian * self.jacobian.transpose() + Matrix6::identity() * 1e-6;
+        let projected = match jjt.cholesky() {
+            Some(chol) => {
+                let j_posture: Vector6<f64> = Vector6::from_iterator((&self.jacobian * &self.posture).iter().copied());
+                let solved = chol.solve(&j_posture);
+                &self.posture - self.jacobian.transpose() * solved
+            }
+            None => self.posture.clone(),
+        };
+
+        for (i, joint) in self.robot.joints().iter().enumerate() {
+            let mut tau = self.task_torques[i] + self.gravity[i] + projected[i];
+            let limit = joint.velocity * self.gains.velocity_limit_fraction;
+            let excess = obs.qd[i].abs() - limit;
+            if joint.velocity.is_finite() && excess > 0.0 {
+                tau -= self.gains.velocity_brake_gain * excess * obs.qd[i].signum();
+            }
+            self.torques[i] = if tau.is_finite() { tau.clamp(-joint.effort, joint.effort) } else { 0.0 };
+        }
+        self.torques.as_slice()
+    }
+}
+
+/// The rotation vector of `desired · current⁻¹` taking the shorter way round.
+fn rotation_error(desired: &UnitQuaternion<f64>, current: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let mut error = desired * current.inverse();
+    if error.w < 0.0 {
+        error = UnitQuaternion::new_unchecked(-error.into_inner());
+    }
+    error.scaled_axis()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Translation3;
+
+    fn state_at(tool: Isometry3<f64>, applied: Vector6<f64>) -> ControlState {
+        ControlState { tool, twist: Vector6::zeros(), applied }
+    }
+
+    fn command(frame: Isometry3<f64>, position: [bool; 6]) -> Command {
+        Command {
+            pose: Isometry3::from_parts(Translation3::new(0.5, 0.1, 0.3), UnitQuaternion::from_euler_angles(3.0, 0.1, 0.2)),
+            twist: Vector6::zeros(),
+            wrench: Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            frame,
+            position,
+            stiffness: [2000.0, 1500.0, 1000.0, 150.0, 120.0, 100.0],
+            kp: 0.5,
+            ki: 5.0,
+            integral_limit: Some(10.0),
+        }
+    }
+
+    #[test]
+    fn all_position_is_plain_impedance_control() {
+        let gains = ControllerGains::default();
+        let tool = Isometry3::from_parts(Translation3::new(0.49, 0.12, 0.31), UnitQuaternion::from_euler_angles(3.0, 0.12, 0.2));
+        // The compliant frame at the control point, unrotated: Ω is K and Ω̃ vanishes.
+        let frame = Isometry3::from_parts(tool.translation, UnitQuaternion::identity());
+        let cmd = Command { stiffness: [1000.0, 1000.0, 1000.0, 100.0, 100.0, 100.0], ..command(frame, [true; 6]) };
+        let mut integral = Vector6::zeros();
+        let wrench = HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::new(5.0, 0.0, 3.0, 0.0, 0.0, 0.0)), &cmd, &mut integral, 0.001);
+        let expected_force = (cmd.pose.translation.vector - tool.translation.vector) * 1000.0;
+        let expected_moment = rotation_error(&cmd.pose.rotation, &tool.rotation) * 100.0;
+        assert!((wrench.fixed_rows::<3>(0) - expected_force).norm() < 1e-9, "{wrench}");
+        assert!((wrench.fixed_rows::<3>(3) - expected_moment).norm() < 1e-9, "{wrench}");
+        assert_eq!(integral, Vector6::zeros(), "measured forces are ignored on position axes");
+    }
+
+    #[test]
+    fn force_axis_pushes_along_the_frame_z_with_the_sign_of_the_applied_force() {
+        // A surface frame with z pointing down (into a table below the tool).
+        let frame = Isometry3::from_parts(Translation3::new(0.5, 0.1, 0.3), UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0));
+        let tool = Isometry3::from_parts(Translation3::new(0.5, 0.1, 0.3), UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0));
+        let mut cmd = command(frame, [true, true, false, true, true, true]);
+        cmd.pose = tool;
+        // Desired: press down with 10 N (applied force along frame z = −base z).
+        cmd.wrench = Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0);
+        let gains = ControllerGains::default();
+        let mut integral = Vector6::zeros();
+        // Not in contact yet: the measured applied force is zero.
+        let wrench = HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::zeros()), &cmd, &mut integral, 0.001);
+        assert!(wrench[2] < -10.0, "commands more than the feed-forward downwards: {wrench}");
+        assert!(wrench.fixed_rows::<2>(0).norm() < 1e-9);
+        // In contact with exactly the desired force: feed-forward only, no error.
+        let mut integral = Vector6::zeros();
+        let wrench = HybridController::cartesian_wrench(&gains, &state_at(tool, cmd.wrench), &cmd, &mut integral, 0.001);
+        assert!((wrench[2] + 10.0).abs() < 1e-9, "{wrench}");
+        assert!(integral.norm() < 1e-12);
+    }
+
+    #[test]
+    fn the_integral_saturates() {
+        let frame = Isometry3::identity();
+        let mut cmd = command(frame, [true, true, false, true, true, true]);
+        cmd.wrench = Vector6::new(0.0, 0.0, 20.0, 0.0, 0.0, 0.0);
+        let gains = ControllerGains::default();
+        let tool = cmd.pose;
+        let mut integral = Vector6::zeros();
+        for _ in 0..1_000 {
+            HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::zeros()), &cmd, &mut integral, 0.001);
+        }
+        assert!((integral[2] * cmd.ki - 10.0).abs() < 1e-9, "k_i ∫ is clamped at the limit: {}", integral[2] * cmd.ki);
+    }
+
+    #[test]
+    fn the_law_is_invariant_under_a_rigid_motion_of_the_whole_scene() {
+        let gains = ControllerGains::default();
+        let frame = Isometry3::from_parts(Translation3::new(0.52, 0.08, 0.25), UnitQuaternion::from_euler_angles(2.9, 0.2, -0.4));
+        let tool = Isometry3::from_parts(Translation3::new(0.49, 0.12, 0.31), UnitQuaternion::from_euler_angles(3.0, 0.12, 0.2));
+        let mut cmd = command(frame, [true, false, false, true, true, false]);
+        cmd.twist = Vector6::new(0.01, -0.02, 0.03, 0.1, 0.0, -0.1);
+        cmd.wrench = Vector6::new(1.0, 2.0, -8.0, 0.1, 0.0, 0.3);
+        let state = ControlState { tool, twist: Vector6::new(0.02, 0.01, -0.01, 0.05, -0.1, 0.2), applied: Vector6::new(0.5, 1.0, -6.0, 0.0, 0.05, 0.1) };
+        let mut integral = Vector6::zeros();
+        let wrench = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 0.001);
+
+        let motion = Isometry3::from_parts(Translation3::new(-1.0, 2.0, 0.5), UnitQuaternion::from_euler_angles(0.7, -0.3, 1.9));
+        let rot = motion.rotation;
+        let spin = |v: &Vector6<f64>| {
+            let mut out = Vector6::zeros();
+            out.fixed_rows_mut::<3>(0).copy_from(&(rot * v.fixed_rows::<3>(0)));
+            out.fixed_rows_mut::<3>(3).copy_from(&(rot * v.fixed_rows::<3>(3)));
+            out
+        };
+        let moved_cmd = Command { pose: motion * cmd.pose, frame: motion * cmd.frame, twist: spin(&cmd.twist), wrench: spin(&cmd.wrench), ..cmd.clone() };
+        let moved_state = ControlState { tool: motion * state.tool, twist: spin(&state.twist), applied: spin(&state.applied) };
+        let mut moved_integral = Vector6::zeros();
+        let moved = HybridController::cartesian_wrench(&gains, &moved_state, &moved_cmd, &mut moved_integral, 0.001);
+        assert!((moved - spin(&wrench)).norm() < 1e-9, "{moved} vs {}", spin(&wrench));
+        assert!((moved_integral - integral).norm() < 1e-12, "the integral lives in the compliant frame");
+    }
+
+    #[test]
+    fn damping_opposes_velocity_on_every_axis() {
+        let gains = ControllerGains::default();
+        let tool = Isometry3::identity();
+        let cmd = Command { pose: tool, ..command(Isometry3::identity(), [true, true, false, true, false, true]) };
+        for axis in 0..6 {
+            let mut twist = Vector6::zeros();
+            twist[axis] = 0.1;
+            let mut integral = Vector6::zeros();
+            let state = ControlState { tool, twist, applied: Vector6::zeros() };
+            let wrench = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 0.001);
+            assert!(wrench[axis] < 0.0, "axis {axis}: {wrench}");
+        }
+    }
+}

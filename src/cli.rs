@@ -81,6 +81,11 @@ pub enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.
+    #[command(after_help = "Examples:
+  skillc robot examples/robots/lwr4.urdf
+  skillc robot examples/robots/lwr4.urdf --tool probe_tip --q 0,-0.5,0,1.5,0,-1.14,0 --json")]
+    Robot(crate::robot_cmd::RobotArgs),
     /// Print an intermediate stage (the output format may change between versions).
     Dump {
         /// The stage to print.
@@ -126,6 +131,10 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Graph { file, format, output } => graph(&file, format, output.as_deref()),
         Command::Fmt { files, check } => fmt(&files, check),
         Command::Dump { stage, file } => dump(&file, stage),
+        Command::Robot(args) => match crate::robot_cmd::run(&args) {
+            Ok(()) => 0,
+            Err(err) => usage_error(err),
+        },
     };
     ExitCode::from(code)
 }

@@ -6,5 +6,6 @@ pub mod atomic;
 pub mod cli;
 pub mod frontend;
 pub mod render;
+pub mod robot_cmd;
 
 pub use cli::{run, Cli};

@@ -8,22 +8,22 @@ use skill_runtime::robot::Robot;
 /// Print a robot's chain (joints, axes, limits, masses) and, at a configuration, the tool pose,
 /// the tool Jacobian and the gravity torques.
 #[derive(Debug, Clone, clap::Args)]
-pub(crate) struct RobotArgs {
+pub struct RobotArgs {
     /// The URDF file.
-    pub(crate) urdf: PathBuf,
+    pub urdf: PathBuf,
     /// The tool link (default: the last link of the chain).
     #[arg(long, value_name = "LINK")]
-    pub(crate) tool: Option<String>,
+    pub tool: Option<String>,
     /// Joint positions in rad, comma separated (default: all zero).
     #[arg(long, value_name = "Q1,...,Qn", value_delimiter = ',', allow_hyphen_values = true)]
-    pub(crate) q: Option<Vec<f64>>,
+    pub q: Option<Vec<f64>>,
     /// Print exactly one JSON object instead of text.
     #[arg(long)]
-    pub(crate) json: bool,
+    pub json: bool,
 }
 
 /// Runs `skillc robot`, printing to stdout.
-pub(crate) fn run(args: &RobotArgs) -> Result<(), Box<dyn std::error::Error>> {
+pub fn run(args: &RobotArgs) -> Result<(), Box<dyn std::error::Error>> {
     let robot = Robot::from_urdf_file(&args.urdf, args.tool.as_deref())?;
     let inspection = robot.inspect(args.q.as_deref())?;
     let text = if args.json {

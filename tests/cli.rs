@@ -132,3 +132,21 @@ fn stdlib_files_are_formatted() {
     let out = skillc(&args);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
 }
+
+#[test]
+fn robot_json_has_exactly_the_documented_keys() {
+    let out = skillc(&["robot", "examples/robots/lwr4.urdf", "--tool", "probe_tip", "--q", "0,-0.5,0,1.5,0,-1.14,0", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let value: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let mut keys: Vec<&str> = value.as_object().expect("object").keys().map(String::as_str).collect();
+    keys.sort_unstable();
+    assert_eq!(
+        keys,
+        ["dof", "gravity_torque", "jacobian", "joints", "q", "robot", "tool_link", "tool_position", "tool_quaternion_wxyz"]
+    );
+    assert_eq!(value["dof"], 7);
+    assert_eq!(value["jacobian"].as_array().expect("rows").len(), 6);
+    let out = skillc(&["robot", "examples/robots/lwr4.urdf", "--q", "0,1"]);
+    assert_eq!(out.status.code(), Some(2), "a wrong-length configuration is a usage error");
+    assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
+}

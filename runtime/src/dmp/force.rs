@@ -8,11 +8,7 @@ use nalgebra::Vector3;
 use super::{Dmp, DmpConfig, DmpError};
 
 /// Learns a 3-channel DMP of the force vectors `forces_n` [N] at times `t_s`.
-pub fn fit_force(
-    config: &DmpConfig,
-    t_s: &[f64],
-    forces_n: &[Vector3<f64>],
-) -> Result<Dmp, DmpError> {
+pub fn fit_force(config: &DmpConfig, t_s: &[f64], forces_n: &[Vector3<f64>]) -> Result<Dmp, DmpError> {
     Dmp::fit_points(config, t_s, forces_n)
 }
 

@@ -84,7 +84,7 @@ impl Default for DmpConfig {
             n_basis: 50,
             stiffness: 156.25,
             alpha_s: 100f64.ln(),
-            width_factor: 1.0,
+            width_factor: 2.0,
             regression: Regression::Ridge { lambda: 1e-9 },
         }
     }

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use super::basis::Basis;
 use super::canonical::CanonicalSystem;
-use super::fit::{derivatives, fit_weights};
+use super::fit::{fit_weights, Stencil};
 use super::{check_times, DmpConfig, DmpError};
 
 /// `δ(q₁, q₂) = 2 log(q₂ ∗ q̄₁)`: the rotation vector taking `q₁` to `q₂` (base frame).
@@ -66,6 +66,7 @@ impl QuatDmp {
             alpha_s: config.alpha_s,
         };
         let phases: Vec<f64> = times.iter().map(|&t| canonical.phase(t, tau)).collect();
+        let fractions: Vec<f64> = times.iter().map(|&t| t / tau).collect();
 
         // Angular velocity (base frame) from the quadratic through each sample and its
         // neighbours, in the tangent space at the middle one.
@@ -86,9 +87,10 @@ impl QuatDmp {
         let mut targets = vec![vec![0.0; n]; 3];
         let (mut w_axis, mut dw, mut unused) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let errors: Vec<Vector3<f64>> = orientation.iter().map(|q| quat_error(q, &goal)).collect();
+        let stencil = Stencil::new(&times);
         for axis in 0..3 {
             w_axis.iter_mut().zip(&omega).for_each(|(dst, w)| *dst = w[axis]);
-            derivatives(&times, &w_axis, &mut dw, &mut unused);
+            stencil.apply(&w_axis, &mut dw, &mut unused);
             for idx in 0..n {
                 targets[axis][idx] = (tau * tau * dw[idx] + d_gain * tau * w_axis[idx]) / k_gain - errors[idx][axis]
                     + start_error[axis] * phases[idx];
@@ -96,7 +98,7 @@ impl QuatDmp {
         }
         let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
         let refs: Vec<&[f64]> = targets.iter().map(Vec::as_slice).collect();
-        let weights = fit_weights(&basis, config.regression, &phases, &refs)?;
+        let weights = fit_weights(&basis, config.regression, &phases, &fractions, &refs)?;
         Ok(Self {
             config: config.clone(),
             basis,

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::basis::Basis;
 use super::canonical::CanonicalSystem;
-use super::fit::{derivatives, fit_weights};
+use super::fit::{fit_weights, Stencil};
 use super::rollout::DmpRollout;
 use super::{check_times, DmpConfig, DmpError};
 
@@ -40,10 +40,7 @@ impl Dmp {
                 });
             }
             if let Some(index) = channel.iter().position(|v| !v.is_finite()) {
-                return Err(DmpError::NonFinite {
-                    what: "channel",
-                    index,
-                });
+                return Err(DmpError::NonFinite { what: "channel", index });
             }
         }
         let n = t_s.len();
@@ -54,24 +51,25 @@ impl Dmp {
             alpha_s: config.alpha_s,
         };
         let phases: Vec<f64> = times.iter().map(|&t| canonical.phase(t, tau)).collect();
+        let fractions: Vec<f64> = times.iter().map(|&t| t / tau).collect();
         let (k, d) = (config.stiffness, config.damping());
         let (mut dx, mut ddx) = (vec![0.0; n], vec![0.0; n]);
         let mut targets = vec![vec![0.0; n]; channels.len()];
         let (mut start, mut goal) = (Vec::new(), Vec::new());
+        let stencil = Stencil::new(&times);
         for (channel, target) in channels.iter().zip(&mut targets) {
-            derivatives(&times, channel, &mut dx, &mut ddx);
+            stencil.apply(channel, &mut dx, &mut ddx);
             let (x0, g) = (channel[0], channel[n - 1]);
             for idx in 0..n {
                 let s = phases[idx];
-                target[idx] = (tau * tau * ddx[idx] + d * tau * dx[idx]) / k - (g - channel[idx])
-                    + (g - x0) * s;
+                target[idx] = (tau * tau * ddx[idx] + d * tau * dx[idx]) / k - (g - channel[idx]) + (g - x0) * s;
             }
             start.push(x0);
             goal.push(g);
         }
         let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
         let target_refs: Vec<&[f64]> = targets.iter().map(Vec::as_slice).collect();
-        let weights = fit_weights(&basis, config.regression, &phases, &target_refs)?;
+        let weights = fit_weights(&basis, config.regression, &phases, &fractions, &target_refs)?;
         Ok(Self {
             config: config.clone(),
             basis,
@@ -88,9 +86,7 @@ impl Dmp {
         t_s: &[f64],
         points: &[SVector<f64, D>],
     ) -> Result<Self, DmpError> {
-        let channels: Vec<Vec<f64>> = (0..D)
-            .map(|axis| points.iter().map(|p| p[axis]).collect())
-            .collect();
+        let channels: Vec<Vec<f64>> = (0..D).map(|axis| points.iter().map(|p| p[axis]).collect()).collect();
         let refs: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
         Self::fit(config, t_s, &refs)
     }

@@ -108,10 +108,7 @@ pub struct ModelSegment {
 }
 
 /// Segments `demo` by change-point detection on its standardised features.
-pub fn changepoint_demo(
-    demo: &Demo,
-    config: &ChangepointConfig,
-) -> Result<Vec<ModelSegment>, SegmentError> {
+pub fn changepoint_demo(demo: &Demo, config: &ChangepointConfig) -> Result<Vec<ModelSegment>, SegmentError> {
     let features = Features::from_demo(demo, &config.features)?;
     changepoint(&features, &demo.t_s, config)
 }
@@ -153,10 +150,7 @@ impl Prefix {
         let stt_c = (t_end[2] - t_start[2]) - st * st / n;
         let mut total = 0.0;
         for col in 0..self.dims {
-            let (e, s) = (
-                self.values[end * self.dims + col],
-                self.values[start * self.dims + col],
-            );
+            let (e, s) = (self.values[end * self.dims + col], self.values[start * self.dims + col]);
             let (sy, syy, sty) = (e[0] - s[0], e[1] - s[1], e[2] - s[2]);
             let mut sse = syy - sy * sy / n;
             if model == SegmentModel::Linear && stt_c > 1e-300 {
@@ -220,10 +214,7 @@ pub fn changepoint(
         });
     }
     if n < 2 {
-        return Err(SegmentError::TooFewSamples {
-            found: n,
-            required: 2,
-        });
+        return Err(SegmentError::TooFewSamples { found: n, required: 2 });
     }
     let duration = t_s[n - 1] - t_s[0];
     let mean_dt = duration / (n - 1) as f64;
@@ -255,10 +246,7 @@ pub fn changepoint(
     let floor_var = config.noise_floor * config.noise_floor;
 
     // Normalised time keeps the prefix sums well conditioned.
-    let t_norm: Vec<f64> = t_s
-        .iter()
-        .map(|t| (t - t_s[0]) / duration.max(1e-300))
-        .collect();
+    let t_norm: Vec<f64> = t_s.iter().map(|t| (t - t_s[0]) / duration.max(1e-300)).collect();
     let prefix = Prefix::new(&features.data, dims, &t_norm);
     let best_model = |start: usize, end: usize| {
         config

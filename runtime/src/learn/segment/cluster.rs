@@ -22,6 +22,10 @@
 //! Euclidean distance for single samples. Clusters are turned into runs of equal labels, runs
 //! shorter than `min_segment_samples` are merged into their more similar neighbour, and with
 //! [`Cut::Count`] adjacent runs are merged by smallest Ward cost until the count is reached.
+//! When merging short runs leaves fewer segments than asked for (single, average and complete
+//! linkage like to isolate a few outlying samples), the tree is cut lower, one cluster at a
+//! time (up to 64 more), until the count is met. The merge sequence is computed once and
+//! replayed with union-find for each cut.
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -157,7 +161,7 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
     if n < required {
         return Err(SegmentError::TooFewSamples { found: n, required });
     }
-    let labels = match config.temporal {
+    let (merges, unit_len) = match config.temporal {
         Temporal::Connectivity { k } => {
             if k == 0 {
                 return Err(SegmentError::InvalidConfig {
@@ -165,7 +169,7 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
                     reason: "at least one neighbour".to_owned(),
                 });
             }
-            connectivity_labels(&features.data, dims, k, config.linkage, config.cut)
+            (connectivity_merges(&features.data, dims, k, config.linkage), 1)
         }
         Temporal::TimeFeature { weight, max_blocks } => {
             if !(weight.is_finite() && weight >= 0.0) {
@@ -180,23 +184,49 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
                     reason: "at least 2 blocks".to_owned(),
                 });
             }
-            time_feature_labels(
-                &features.data,
-                dims,
-                weight,
-                max_blocks,
-                config.linkage,
-                config.cut,
-            )
+            time_feature_merges(&features.data, dims, weight, max_blocks, config.linkage)
         }
     };
-    Ok(tidy_segments(
-        &features.data,
-        dims,
-        runs(&labels),
-        config.min_segment_samples,
-        target,
-    ))
+    let n_units = n.div_ceil(unit_len);
+    let segments_after = |n_merges: usize| {
+        let labels = labels_after(&merges, n_units, n_merges, unit_len, n);
+        tidy_segments(&features.data, dims, runs(&labels), config.min_segment_samples, target)
+    };
+    match config.cut {
+        Cut::Count { segments } => {
+            // Cutting at `segments` clusters can leave fewer segments once short runs are
+            // merged; cut lower in the tree until the count is met (bounded search).
+            let mut result = Vec::new();
+            for clusters in segments..=(segments + 64).min(n_units) {
+                result = segments_after(n_units.saturating_sub(clusters).min(merges.len()));
+                if result.len() >= segments {
+                    break;
+                }
+            }
+            Ok(result)
+        }
+        Cut::Distance { threshold } => {
+            let n_merges = merges.iter().take_while(|merge| merge.0 <= threshold).count();
+            Ok(segments_after(n_merges))
+        }
+    }
+}
+
+/// Sample labels after applying the first `n_merges` of `merges` (`(height, a, b)` over units of
+/// `unit_len` consecutive samples).
+fn labels_after(
+    merges: &[(f64, usize, usize)],
+    n_units: usize,
+    n_merges: usize,
+    unit_len: usize,
+    n: usize,
+) -> Vec<usize> {
+    let mut parent: Vec<u32> = (0..n_units as u32).collect();
+    for &(_, a, b) in &merges[..n_merges.min(merges.len())] {
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        parent[rb] = ra as u32;
+    }
+    (0..n).map(|k| find(&mut parent, k / unit_len)).collect()
 }
 
 /// A heap entry: a connected pair and the versions of both clusters when it was pushed.
@@ -245,49 +275,31 @@ fn find(parent: &mut [u32], mut x: usize) -> usize {
 }
 
 fn ward_distance(sum_a: &[f64], n_a: f64, sum_b: &[f64], n_b: f64) -> f64 {
-    let dist2: f64 = sum_a
-        .iter()
-        .zip(sum_b)
-        .map(|(a, b)| (a / n_a - b / n_b).powi(2))
-        .sum();
+    let dist2: f64 = sum_a.iter().zip(sum_b).map(|(a, b)| (a / n_a - b / n_b).powi(2)).sum();
     (2.0 * n_a * n_b / (n_a + n_b) * dist2).sqrt()
 }
 
 /// Lance-Williams update of the distance from the union of `a` and `b` to `c`.
-fn lance_williams(
-    linkage: Linkage,
-    d_ac: f64,
-    d_bc: f64,
-    d_ab: f64,
-    n_a: f64,
-    n_b: f64,
-    n_c: f64,
-) -> f64 {
+fn lance_williams(linkage: Linkage, d_ac: f64, d_bc: f64, d_ab: f64, n_a: f64, n_b: f64, n_c: f64) -> f64 {
     match linkage {
         Linkage::Single => d_ac.min(d_bc),
         Linkage::Complete => d_ac.max(d_bc),
         Linkage::Average => (n_a * d_ac + n_b * d_bc) / (n_a + n_b),
-        Linkage::Ward => (((n_a + n_c) * d_ac * d_ac + (n_b + n_c) * d_bc * d_bc
-            - n_c * d_ab * d_ab)
+        Linkage::Ward => (((n_a + n_c) * d_ac * d_ac + (n_b + n_c) * d_bc * d_bc - n_c * d_ab * d_ab)
             / (n_a + n_b + n_c))
             .max(0.0)
             .sqrt(),
     }
 }
 
-fn connectivity_labels(
-    data: &[f64],
-    dims: usize,
-    k: usize,
-    linkage: Linkage,
-    cut: Cut,
-) -> Vec<usize> {
+/// The full merge sequence `(height, a, b)` of connectivity-constrained clustering, in order.
+fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) -> Vec<(f64, usize, usize)> {
     let n = data.len() / dims;
     let mut size = vec![1.0f64; n];
     let mut sum = data.to_vec();
     let mut alive = vec![true; n];
     let mut version = vec![0u32; n];
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut merges = Vec::with_capacity(n);
     let mut neighbours: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
     let mut heap = BinaryHeap::with_capacity(n * k * 2);
     for i in 0..n {
@@ -309,18 +321,12 @@ fn connectivity_labels(
             });
         }
     }
-    let mut n_alive = n;
     // (neighbour, distance to a, distance to b)
     let mut merged: Vec<(u32, Option<f64>, Option<f64>)> = Vec::new();
     while let Some(pair) = heap.pop() {
         let (a, b) = (pair.a as usize, pair.b as usize);
         if !alive[a] || !alive[b] || version[a] != pair.version_a || version[b] != pair.version_b {
             continue;
-        }
-        match cut {
-            Cut::Count { segments } if n_alive <= segments => break,
-            Cut::Distance { threshold } if pair.dist > threshold => break,
-            _ => {}
         }
         // Merge b into a.
         merged.clear();
@@ -349,8 +355,7 @@ fn connectivity_labels(
         size[a] = n_a + n_b;
         alive[b] = false;
         version[a] += 1;
-        parent[b] = a as u32;
-        n_alive -= 1;
+        merges.push((pair.dist, a, b));
         neighbours[b] = Vec::new();
         let mut new_list = Vec::with_capacity(merged.len());
         for &(c, d_ac, d_bc) in &merged {
@@ -363,9 +368,7 @@ fn connectivity_labels(
                     size[c_idx],
                 ),
                 _ => match (d_ac, d_bc) {
-                    (Some(x), Some(y)) => {
-                        lance_williams(linkage, x, y, pair.dist, n_a, n_b, size[c_idx])
-                    }
+                    (Some(x), Some(y)) => lance_williams(linkage, x, y, pair.dist, n_a, n_b, size[c_idx]),
                     (Some(x), None) | (None, Some(x)) => x,
                     (None, None) => continue,
                 },
@@ -384,7 +387,7 @@ fn connectivity_labels(
         }
         neighbours[a] = new_list;
     }
-    (0..n).map(|i| find(&mut parent, i)).collect()
+    merges
 }
 
 fn condensed_index(m: usize, i: usize, j: usize) -> usize {
@@ -392,14 +395,14 @@ fn condensed_index(m: usize, i: usize, j: usize) -> usize {
     i * m - i * (i + 1) / 2 + j - i - 1
 }
 
-fn time_feature_labels(
+/// The merge sequence `(height, a, b)` over blocks, sorted by height, and the block length.
+fn time_feature_merges(
     data: &[f64],
     dims: usize,
     weight: f64,
     max_blocks: usize,
     linkage: Linkage,
-    cut: Cut,
-) -> Vec<usize> {
+) -> (Vec<(f64, usize, usize)>, usize) {
     let n = data.len() / dims;
     let block_len = n.div_ceil(max_blocks).max(1);
     let m = n.div_ceil(block_len);
@@ -470,12 +473,8 @@ fn time_feature_labels(
             let (n_a, n_b) = (size[a], size[b]);
             for c in 0..m {
                 if c != a && c != b && active[c] {
-                    let (d_ac, d_bc) = (
-                        dist[condensed_index(m, a, c)],
-                        dist[condensed_index(m, b, c)],
-                    );
-                    dist[condensed_index(m, b, c)] =
-                        lance_williams(linkage, d_ac, d_bc, d_ab, n_a, n_b, size[c]);
+                    let (d_ac, d_bc) = (dist[condensed_index(m, a, c)], dist[condensed_index(m, b, c)]);
+                    dist[condensed_index(m, b, c)] = lance_williams(linkage, d_ac, d_bc, d_ab, n_a, n_b, size[c]);
                 }
             }
             active[a] = false;
@@ -486,18 +485,7 @@ fn time_feature_labels(
             chain.push(b);
         }
     }
+    // Reducible linkages give monotone heights, so sorting yields a valid merge order.
     merges.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let n_merges = match cut {
-        Cut::Count { segments } => m.saturating_sub(segments.max(1)),
-        Cut::Distance { threshold } => merges
-            .iter()
-            .take_while(|merge| merge.0 <= threshold)
-            .count(),
-    };
-    let mut parent: Vec<u32> = (0..m as u32).collect();
-    for &(_, a, b) in merges.iter().take(n_merges) {
-        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-        parent[ra] = rb as u32;
-    }
-    (0..n).map(|k| find(&mut parent, k / block_len)).collect()
+    (merges, block_len)
 }

@@ -49,9 +49,7 @@ impl Features {
 
     /// Builds the standardised features `set` of `demo`.
     pub fn from_demo(demo: &Demo, set: &FeatureSet) -> Result<Self, SegmentError> {
-        let dims = 3 * usize::from(set.position)
-            + 3 * usize::from(set.force)
-            + usize::from(set.force_magnitude);
+        let dims = 3 * usize::from(set.position) + 3 * usize::from(set.force) + usize::from(set.force_magnitude);
         if dims == 0 {
             return Err(SegmentError::InvalidConfig {
                 name: "features",

@@ -86,9 +86,7 @@ pub enum SegmentError {
         index: usize,
     },
     /// The force never exceeds the contact threshold.
-    #[error(
-        "no contact: the peak force {peak_n:.3} N stays below the threshold `{threshold_n}` N"
-    )]
+    #[error("no contact: the peak force {peak_n:.3} N stays below the threshold `{threshold_n}` N")]
     NoContact {
         /// Largest force magnitude [N].
         peak_n: f64,
@@ -112,11 +110,7 @@ pub(crate) fn runs(labels: &[usize]) -> Vec<Segment> {
 
 /// Ward merge cost of two runs of `data` (row-major, `dims` columns), from their sums.
 fn ward_cost(sum_a: &[f64], n_a: f64, sum_b: &[f64], n_b: f64) -> f64 {
-    let dist2: f64 = sum_a
-        .iter()
-        .zip(sum_b)
-        .map(|(a, b)| (a / n_a - b / n_b).powi(2))
-        .sum();
+    let dist2: f64 = sum_a.iter().zip(sum_b).map(|(a, b)| (a / n_a - b / n_b).powi(2)).sum();
     n_a * n_b / (n_a + n_b) * dist2
 }
 
@@ -142,10 +136,7 @@ pub(crate) fn tidy_segments(
         let right = segments.remove(left + 1);
         segments[left].end = right.end;
         let right_sum = sums.remove(left + 1);
-        sums[left]
-            .iter_mut()
-            .zip(right_sum)
-            .for_each(|(a, b)| *a += b);
+        sums[left].iter_mut().zip(right_sum).for_each(|(a, b)| *a += b);
     };
     let cost = |segments: &[Segment], sums: &[Vec<f64>], left: usize| {
         ward_cost(
@@ -159,8 +150,7 @@ pub(crate) fn tidy_segments(
         if segments.len() < 2 {
             break;
         }
-        let Some((shortest, seg)) = segments.iter().enumerate().min_by_key(|(_, seg)| seg.len())
-        else {
+        let Some((shortest, seg)) = segments.iter().enumerate().min_by_key(|(_, seg)| seg.len()) else {
             break;
         };
         if seg.len() >= min_len {
@@ -168,8 +158,7 @@ pub(crate) fn tidy_segments(
         }
         // Merge into the only neighbour, or the one with the smaller Ward cost.
         let left = if shortest + 1 == segments.len()
-            || (shortest > 0
-                && cost(&segments, &sums, shortest - 1) <= cost(&segments, &sums, shortest))
+            || (shortest > 0 && cost(&segments, &sums, shortest - 1) <= cost(&segments, &sums, shortest))
         {
             shortest - 1
         } else {

@@ -29,10 +29,7 @@ fn assert_breaks(segments: &[Segment], expected: &[usize], tolerance: usize, wha
         "{what}: boundaries {found:?}, expected {expected:?}"
     );
     for (f, e) in found.iter().zip(expected) {
-        assert!(
-            f.abs_diff(*e) <= tolerance,
-            "{what}: boundary {f}, expected {e}"
-        );
+        assert!(f.abs_diff(*e) <= tolerance, "{what}: boundary {f}, expected {e}");
     }
 }
 
@@ -45,12 +42,7 @@ const PIECES: [(usize, [f64; 3]); 3] = [
 #[test]
 fn connectivity_clustering_finds_breaks_with_every_linkage() {
     let features = piecewise(&PIECES, 0.2, 1);
-    for linkage in [
-        Linkage::Ward,
-        Linkage::Complete,
-        Linkage::Average,
-        Linkage::Single,
-    ] {
+    for linkage in [Linkage::Ward, Linkage::Complete, Linkage::Average, Linkage::Single] {
         for k in [1, 3] {
             let config = ClusterConfig {
                 linkage,
@@ -88,12 +80,7 @@ fn time_feature_clustering_finds_breaks_within_a_block() {
             ..ClusterConfig::default()
         };
         let segments = cluster(&features, &config).expect("valid input");
-        assert_breaks(
-            &segments,
-            &[1000, 2100],
-            3,
-            &format!("{linkage:?} time feature"),
-        );
+        assert_breaks(&segments, &[1000, 2100], 3, &format!("{linkage:?} time feature"));
     }
 }
 
@@ -173,11 +160,7 @@ fn changepoint_finds_breaks_and_models() {
     let models: Vec<SegmentModel> = segments.iter().map(|s| s.model).collect();
     assert_eq!(
         models,
-        [
-            SegmentModel::Constant,
-            SegmentModel::Linear,
-            SegmentModel::Constant
-        ]
+        [SegmentModel::Constant, SegmentModel::Linear, SegmentModel::Constant]
     );
 }
 
@@ -193,10 +176,7 @@ fn changepoint_respects_min_length_and_expected_count() {
         ..ChangepointConfig::default()
     };
     let segments = changepoint(&features, &t, &config).expect("valid input");
-    assert!(
-        segments.iter().all(|s| s.segment.len() >= 50),
-        "{segments:?}"
-    );
+    assert!(segments.iter().all(|s| s.segment.len() >= 50), "{segments:?}");
     let config = ChangepointConfig {
         expected_segments: Some(3),
         ..config
@@ -227,8 +207,7 @@ fn touch_splits_at_the_force_peak() {
             Vector3::new(0.0, 0.0, bump) + rng.vector(0.1)
         })
         .collect();
-    let [approach, retract] =
-        split_at_force_peak(&force, &TouchConfig::default()).expect("contact");
+    let [approach, retract] = split_at_force_peak(&force, &TouchConfig::default()).expect("contact");
     assert!(approach.end.abs_diff(612) <= 3, "split at {}", approach.end);
     assert_eq!(retract.start, approach.end);
     let quiet: Vec<Vector3<f64>> = (0..100).map(|_| rng.vector(0.1)).collect();

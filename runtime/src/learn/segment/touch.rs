@@ -27,25 +27,13 @@ impl Default for TouchConfig {
 
 /// Splits at the sample of largest (smoothed) force magnitude into the approach
 /// `0..peak` and the return `peak..n` (the peak sample starts the second segment).
-pub fn split_at_force_peak(
-    force_n: &[Vector3<f64>],
-    config: &TouchConfig,
-) -> Result<[Segment; 2], SegmentError> {
+pub fn split_at_force_peak(force_n: &[Vector3<f64>], config: &TouchConfig) -> Result<[Segment; 2], SegmentError> {
     let n = force_n.len();
     if n < 3 {
-        return Err(SegmentError::TooFewSamples {
-            found: n,
-            required: 3,
-        });
+        return Err(SegmentError::TooFewSamples { found: n, required: 3 });
     }
-    if let Some(index) = force_n
-        .iter()
-        .position(|f| !f.iter().all(|v| v.is_finite()))
-    {
-        return Err(SegmentError::NonFinite {
-            what: "force_n",
-            index,
-        });
+    if let Some(index) = force_n.iter().position(|f| !f.iter().all(|v| v.is_finite())) {
+        return Err(SegmentError::NonFinite { what: "force_n", index });
     }
     let half = config.smoothing_samples / 2;
     let magnitude: Vec<f64> = force_n.iter().map(|f| f.norm()).collect();
@@ -69,14 +57,5 @@ pub fn split_at_force_peak(
         });
     }
     let peak = peak.clamp(1, n - 1);
-    Ok([
-        Segment {
-            start: 0,
-            end: peak,
-        },
-        Segment {
-            start: peak,
-            end: n,
-        },
-    ])
+    Ok([Segment { start: 0, end: peak }, Segment { start: peak, end: n }])
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use nalgebra::{DVector, Matrix6xX, Vector6};
 use skill_runtime::plant::{Observation, Plant};
 use skill_runtime::robot::{Robot, RobotData};
-use skill_runtime::sim::{RapierOptions, RapierPlant, Scene, SensorConfig};
+use skill_runtime::sim::{RapierOptions, RapierPlant, Scene, SensorConfig, SIM_F64};
 
 fn scene(name: &str) -> Scene {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -61,7 +61,7 @@ fn gravity_compensation_holds_the_arm_still() {
     let configs: [[f64; 7]; 4] = [
         [0.0, -0.5, 0.0, 1.5, 0.0, -1.14, 0.0],
         [0.3, 0.6, -0.2, -1.4, 0.1, 0.9, 0.2],
-        [0.0, 1.5707963, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0],
         [-1.0, -1.0, 1.2, 1.0, -0.8, 1.2, 1.5],
     ];
     for q0 in configs {
@@ -77,12 +77,16 @@ fn gravity_compensation_holds_the_arm_still() {
         }
         let drift = (plant.observe().q - start).abs().max();
         eprintln!("gravity compensation at {q0:?}: drift {drift:.3e} rad over 5 s");
-        // The issue asks for < 1e-6 rad. NOT MET yet: the table pose drifts 1.0e-6 rad, the bent
-        // pose 2.4e-4 rad and the horizontal arm 6.1e-4 rad (wrist rolls A4/A6 under a small,
-        // constant acceleration). rapier's link poses agree with the model to 2e-7 m, so the cause is
-        // a small torque mismatch (suspected: f32 round-off amplified by the light wrist; not yet
-        // isolated). The bound guards regressions at today's level; see the issue 3 report.
-        assert!(drift < 1e-3, "q0 {q0:?}: drift {drift:e} rad over 5 s");
+        // The issue asks for < 1e-6 rad. The model and rapier agree exactly: with rapier3d-f64 the same
+        // plant drifts 2e-13 to 2e-12 rad here. With rapier3d (f32) its gravity forces carry f32
+        // round-off (about 1e-5 N m on the 30-50 N m shoulder torques), which leaves a residual
+        // acceleration up to 5e-5 rad/s²: 1.0e-6, 2.4e-4, 7.5e-4 and 6.9e-4 rad over 5 s. No torque
+        // application can remove that, so the f32 build is held to its own floor until the switch.
+        let bound = if SIM_F64 { 1e-6 } else { 1e-3 };
+        assert!(
+            drift < bound,
+            "q0 {q0:?}: drift {drift:e} rad over 5 s (f64: {SIM_F64})"
+        );
     }
 }
 

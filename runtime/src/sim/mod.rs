@@ -5,6 +5,6 @@ mod rapier_plant;
 mod scene;
 mod sensor;
 
-pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError};
+pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError, SIM_F64};
 pub use scene::{ObjectKind, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec};
 pub use sensor::{SensorConfig, WristSensor};

@@ -1,8 +1,10 @@
 //! The rapier plant: the robot as a rapier multibody with exact joint torques, the scene's objects and
 //! the wrist sensor. The only file that touches rapier's (glam) types.
+// `Real` is f32 or f64 depending on the rapier flavour: casts and conversions to it are identities in one.
+#![allow(clippy::unnecessary_cast, clippy::useless_conversion)]
 
 use nalgebra::{DVector, Isometry3, IsometryMatrix3, Matrix3, UnitQuaternion, Vector3, Vector6};
-use rapier3d::math::{Pose, Rotation, Vector};
+use rapier3d::math::{Pose, Real, Rotation, Vector};
 use rapier3d::prelude::{
     CCDSolver, CoefficientCombineRule, ColliderBuilder, ColliderHandle, ColliderSet, DefaultBroadPhase,
     GenericJointBuilder, Group, ImpulseJointSet, IntegrationParameters, InteractionGroups, InteractionTestMode,
@@ -59,14 +61,21 @@ impl Default for RapierOptions {
     }
 }
 
+/// Whether the simulation runs in double precision (`rapier3d-f64`); `false` with `rapier3d` (f32).
+pub const SIM_F64: bool = std::mem::size_of::<Real>() == 8;
+
 /// The robot and scene simulated by rapier, 1 ms steps, torque-controlled.
 ///
-/// **Precision.** rapier is used in its `f32` flavour (crate `rapier3d`), deliberately: it is
-/// 1.5-2× faster than `rapier3d-f64` (about 20 000 vs 12-19 000 steps/s measured for this arm),
-/// compiles once (the two flavours are separate crates), and its error is far below what matters
-/// here: gravity compensation from the f64 model holds the arm to about 1e-8 rad over 5 s and a
-/// 10 N press reads back within 0.01 N. The controller and model stay in f64; conversion happens
-/// only at this plant's boundary.
+/// **Precision.** rapier's scalar is [`Real`](rapier3d::math::Real): `f32` with the crate `rapier3d`
+/// used today, `f64` with `rapier3d-f64` (this file compiles unchanged with either; switch with
+/// `rapier3d = { package = "rapier3d-f64", version = "0.36.1" }` in the workspace manifest). See
+/// [`SIM_F64`]. The controller and model stay in f64; conversion happens only at this plant's boundary.
+/// In `f32` the multibody's gravity forces are off by f32 round-off (link poses about 3e-7 m off at
+/// 1 m reach, generalized forces about 1e-5 N m on 30-50 N m), so τ = g(q) from the f64 model leaves
+/// a residual acceleration up to 5e-5 rad/s² and the arm drifts up to 8e-4 rad over 5 s; in `f64`
+/// the same code holds it to 2e-12 rad. Measured cost of `f64`: about 4 % (16.2 vs 16.9 µs a step
+/// pressing on the table with the sensor on, release, 2-core VM). A 10 N press reads back within
+/// 0.0002 N in both.
 ///
 /// **Torques.** rapier has no "joint torque" input. Every step each joint torque τᵢ is applied as a
 /// pure moment `+τᵢ aᵢ` on the child body and `−τᵢ aᵢ` on the parent (aᵢ the world joint axis); the
@@ -104,7 +113,7 @@ pub struct RapierPlant {
 }
 
 fn vec3(v: &Vector3<f64>) -> Vector {
-    Vector::new(v.x as f32, v.y as f32, v.z as f32)
+    Vector::new(v.x as Real, v.y as Real, v.z as Real)
 }
 
 fn from_vec3(v: Vector) -> Vector3<f64> {
@@ -113,7 +122,7 @@ fn from_vec3(v: Vector) -> Vector3<f64> {
 
 fn quat(rot: &Matrix3<f64>) -> Rotation {
     let q = UnitQuaternion::from_matrix(rot);
-    Rotation::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32).normalize()
+    Rotation::from_xyzw(q.i as Real, q.j as Real, q.k as Real, q.w as Real).normalize()
 }
 
 fn pose_of(iso: &IsometryMatrix3<f64>) -> Pose {
@@ -150,18 +159,19 @@ fn rpy_pose(xyz: [f64; 3], rpy: [f64; 3]) -> Pose {
 
 /// rapier's cylinders and capsules run along y; URDF's and the scene's along z.
 fn z_to_y() -> Pose {
-    Pose::from_rotation(Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2))
+    Pose::from_rotation(Rotation::from_rotation_x(std::f64::consts::FRAC_PI_2 as Real))
 }
 
-/// rapier mass properties; diagonal tensors go in as principal moments (no f32 eigen-solve).
+/// rapier mass properties; diagonal tensors go in as principal moments (no eigen-solve here; rapier may still
+/// re-diagonalise when it sums them with the tool colliders' zero mass, which only permutes the axes).
 fn mass_properties(mass: f64, com: &Vector3<f64>, inertia: &Matrix3<f64>) -> MassProperties {
     let off_diagonal = inertia[(0, 1)].abs() + inertia[(0, 2)].abs() + inertia[(1, 2)].abs();
     if off_diagonal == 0.0 {
-        MassProperties::new(vec3(com), mass as f32, vec3(&inertia.diagonal()))
+        MassProperties::new(vec3(com), mass as Real, vec3(&inertia.diagonal()))
     } else {
         MassProperties::with_inertia_matrix(
             vec3(com),
-            mass as f32,
+            mass as Real,
             rapier3d::math::Matrix::from_cols(
                 vec3(&inertia.column(0).into_owned()),
                 vec3(&inertia.column(1).into_owned()),
@@ -229,7 +239,7 @@ impl RapierPlant {
         let mut plant = RapierPlant {
             pipeline: PhysicsPipeline::new(),
             params: IntegrationParameters {
-                dt: spec.sim.dt as f32,
+                dt: spec.sim.dt as Real,
                 // One solver iteration reproduces the exact multibody dynamics (more substeps change
                 // the accelerations); clustering would merge manifolds the sensor reads.
                 num_solver_iterations: 1,
@@ -246,9 +256,9 @@ impl RapierPlant {
             soft_bodies: SoftBodySet::new(),
             ccd: CCDSolver::new(),
             gravity: Vector::new(
-                spec.sim.gravity[0] as f32,
-                spec.sim.gravity[1] as f32,
-                spec.sim.gravity[2] as f32,
+                spec.sim.gravity[0] as Real,
+                spec.sim.gravity[1] as Real,
+                spec.sim.gravity[2] as Real,
             ),
             root: RigidBodyHandle::invalid(),
             links: Vec::with_capacity(n),
@@ -294,7 +304,7 @@ impl RapierPlant {
                 .local_frame2(Pose::from_rotation(align))
                 .contacts_enabled(false);
             if info.lower.is_finite() && info.upper.is_finite() {
-                joint = joint.limits(JointAxis::AngX, [info.lower as f32, info.upper as f32]);
+                joint = joint.limits(JointAxis::AngX, [info.lower as Real, info.upper as Real]);
             }
             let joint_handle = self
                 .multibody_joints
@@ -310,17 +320,17 @@ impl RapierPlant {
             for collision in &link.collisions {
                 let shape_in_body = pose_of(&link.link_in_body) * pose_of_quat(&collision.shape_in_link);
                 let (builder, shape_pose) = match collision.shape {
-                    Shape::Sphere { radius } => (ColliderBuilder::ball(radius as f32), shape_in_body),
+                    Shape::Sphere { radius } => (ColliderBuilder::ball(radius as Real), shape_in_body),
                     Shape::Cuboid { size } => (
-                        ColliderBuilder::cuboid(size.x as f32 / 2.0, size.y as f32 / 2.0, size.z as f32 / 2.0),
+                        ColliderBuilder::cuboid(size.x as Real / 2.0, size.y as Real / 2.0, size.z as Real / 2.0),
                         shape_in_body,
                     ),
                     Shape::Cylinder { radius, length } => (
-                        ColliderBuilder::cylinder(length as f32 / 2.0, radius as f32),
+                        ColliderBuilder::cylinder(length as Real / 2.0, radius as Real),
                         shape_in_body * z_to_y(),
                     ),
                     Shape::Capsule { radius, length } => (
-                        ColliderBuilder::capsule_z(length as f32 / 2.0, radius as f32),
+                        ColliderBuilder::capsule_z(length as Real / 2.0, radius as Real),
                         shape_in_body,
                     ),
                 };
@@ -344,8 +354,8 @@ impl RapierPlant {
         if let Some((multibody, _)) = self.multibody_joints.get_mut(self.joints[0]) {
             // Pitfall: a fresh multibody reports a free root until its kinematics run once.
             multibody.forward_kinematics(&self.bodies, true);
-            multibody.damping_mut().fill(options.joint_damping as f32);
-            let disp: Vec<f32> = q0.iter().map(|q| *q as f32).collect();
+            multibody.damping_mut().fill(options.joint_damping as Real);
+            let disp: Vec<Real> = q0.iter().map(|q| *q as Real).collect();
             multibody.apply_displacements(&disp);
             multibody.forward_kinematics(&self.bodies, true);
             multibody.update_rigid_bodies(&mut self.bodies, true);
@@ -356,7 +366,7 @@ impl RapierPlant {
         let groups = InteractionGroups::new(SCENE_GROUP, TOOL_GROUP, InteractionTestMode::And);
         for (name, object) in &scene.spec().objects {
             let pose = rpy_pose(object.xyz, object.rpy);
-            let friction = object.friction as f32;
+            let friction = object.friction as Real;
             let material = |builder: ColliderBuilder| {
                 builder
                     .friction(friction)
@@ -369,9 +379,9 @@ impl RapierPlant {
                     let size = object.size.unwrap_or([0.1; 3]);
                     let body = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
                     let collider = material(ColliderBuilder::cuboid(
-                        size[0] as f32 / 2.0,
-                        size[1] as f32 / 2.0,
-                        size[2] as f32 / 2.0,
+                        size[0] as Real / 2.0,
+                        size[1] as Real / 2.0,
+                        size[2] as Real / 2.0,
                     ));
                     self.colliders.insert_with_parent(collider, body, &mut self.bodies);
                 }
@@ -379,18 +389,18 @@ impl RapierPlant {
                     let body = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
                     let collider = material(
                         ColliderBuilder::cylinder(
-                            object.length.unwrap_or(0.1) as f32 / 2.0,
-                            object.radius.unwrap_or(0.1) as f32,
+                            object.length.unwrap_or(0.1) as Real / 2.0,
+                            object.radius.unwrap_or(0.1) as Real,
                         )
                         .position(z_to_y()),
                     );
                     self.colliders.insert_with_parent(collider, body, &mut self.bodies);
                 }
                 ObjectKind::Button => {
-                    let radius = object.radius.unwrap_or(0.02) as f32;
-                    let height = object.height.unwrap_or(0.02) as f32;
-                    let mass = object.mass.unwrap_or(0.02) as f32;
-                    let travel = object.travel.unwrap_or(0.01) as f32;
+                    let radius = object.radius.unwrap_or(0.02) as Real;
+                    let height = object.height.unwrap_or(0.02) as Real;
+                    let mass = object.mass.unwrap_or(0.02) as Real;
+                    let travel = object.travel.unwrap_or(0.01) as Real;
                     let housing = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
                     let cap = self.bodies.insert(
                         RigidBodyBuilder::dynamic()
@@ -495,7 +505,7 @@ impl RapierPlant {
                 continue;
             };
             let axis_world = rb.position().rotation * vec3(&body.axis);
-            let moment = axis_world * self.torque[idx] as f32;
+            let moment = axis_world * self.torque[idx] as Real;
             if let Some(rb) = self.bodies.get_mut(self.links[idx]) {
                 rb.add_torque(moment, true);
             }
@@ -520,7 +530,7 @@ impl RapierPlant {
             if let Some(cap) = self.bodies.get_mut(button.cap) {
                 let axis = cap.position().rotation * Vector::Z;
                 cap.reset_forces(false);
-                cap.add_force(axis * push as f32, true);
+                cap.add_force(axis * push as Real, true);
             }
         }
     }
@@ -610,7 +620,7 @@ impl Plant for RapierPlant {
     }
 
     fn step(&mut self, dt: f64) -> Result<(), PlantError> {
-        self.params.dt = dt as f32;
+        self.params.dt = dt as Real;
         self.apply_joint_torques();
         self.pipeline.step(
             self.gravity,

@@ -53,9 +53,7 @@ pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded
         .map(|(idx, line)| (idx + 1, line.trim()))
         .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'));
     let Some((_, header)) = lines.next() else {
-        return Err(DemoError::Empty {
-            file: file.to_owned(),
-        });
+        return Err(DemoError::Empty { file: file.to_owned() });
     };
     let names: Vec<&str> = header
         .split(',')
@@ -160,9 +158,7 @@ pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded
         rows.push(row);
     }
     if demo.is_empty() {
-        return Err(DemoError::HeaderOnly {
-            file: file.to_owned(),
-        });
+        return Err(DemoError::HeaderOnly { file: file.to_owned() });
     }
     let required = options.min_samples.max(2);
     if demo.len() < required {
@@ -229,8 +225,7 @@ mod tests {
 
     #[test]
     fn missing_columns_are_all_named() {
-        let err = parse("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz\n0,0,0,0,1,0,0,0,0,0,0\n")
-            .expect_err("lacks torques");
+        let err = parse("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz\n0,0,0,0,1,0,0,0,0,0,0\n").expect_err("lacks torques");
         assert_eq!(
             err.to_string(),
             "demonstration `demo.csv` lacks column(s) `mx`, `my`, `mz`"
@@ -257,48 +252,29 @@ mod tests {
 
     #[test]
     fn nan_and_infinity_name_row_and_column() {
-        let text = format!(
-            "{HEADER}\n{}\n0.01,0.1,NaN,0.3,1,0,0,0,0,0,0,0,0,0\n",
-            row(0.0)
-        );
+        let text = format!("{HEADER}\n{}\n0.01,0.1,NaN,0.3,1,0,0,0,0,0,0,0,0,0\n", row(0.0));
         let err = parse(&text).expect_err("nan");
         assert_eq!(
             err.to_string(),
             "row 3, column `py` of `demo.csv` is not finite (`NaN`)"
         );
-        let text = format!(
-            "{HEADER}\n{}\n0.01,0.1,0.2,0.3,1,0,0,0,0,0,inf,0,0,0\n",
-            row(0.0)
-        );
-        assert!(matches!(
-            parse(&text),
-            Err(DemoError::NonFinite { row: 3, .. })
-        ));
-        let text = format!(
-            "{HEADER}\n{}\n0.01,0.1,abc,0.3,1,0,0,0,0,0,0,0,0,0\n",
-            row(0.0)
-        );
-        assert!(matches!(
-            parse(&text),
-            Err(DemoError::NotANumber { row: 3, .. })
-        ));
+        let text = format!("{HEADER}\n{}\n0.01,0.1,0.2,0.3,1,0,0,0,0,0,inf,0,0,0\n", row(0.0));
+        assert!(matches!(parse(&text), Err(DemoError::NonFinite { row: 3, .. })));
+        let text = format!("{HEADER}\n{}\n0.01,0.1,abc,0.3,1,0,0,0,0,0,0,0,0,0\n", row(0.0));
+        assert!(matches!(parse(&text), Err(DemoError::NotANumber { row: 3, .. })));
     }
 
     #[test]
     fn time_must_strictly_increase() {
         let text = format!("{HEADER}\n{}\n{}\n{}\n", row(0.0), row(0.01), row(0.01));
         let err = parse(&text).expect_err("repeated time");
-        assert!(
-            matches!(err, DemoError::TimeNotIncreasing { row: 4, .. }),
-            "{err}"
-        );
+        assert!(matches!(err, DemoError::TimeNotIncreasing { row: 4, .. }), "{err}");
     }
 
     #[test]
     fn too_few_samples_is_an_error() {
         let text = format!("{HEADER}\n{}\n{}\n", row(0.0), row(0.01));
-        let err =
-            parse_csv("demo.csv", &text, &ReadOptions { min_samples: 10 }).expect_err("too few");
+        let err = parse_csv("demo.csv", &text, &ReadOptions { min_samples: 10 }).expect_err("too few");
         assert!(matches!(
             err,
             DemoError::TooFewSamples {

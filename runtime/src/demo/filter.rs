@@ -63,32 +63,19 @@ pub fn low_pass(demo: &Demo, cutoff_hz: f64, order: FilterOrder) -> Result<Demo,
 
     let mut filter_vectors = |values: &mut [Vector3<f64>]| {
         for axis in 0..3 {
-            channel
-                .iter_mut()
-                .zip(values.iter())
-                .for_each(|(c, v)| *c = v[axis]);
+            channel.iter_mut().zip(values.iter()).for_each(|(c, v)| *c = v[axis]);
             section.filtfilt(&mut channel, pad, &mut scratch);
-            values
-                .iter_mut()
-                .zip(&channel)
-                .for_each(|(v, c)| v[axis] = *c);
+            values.iter_mut().zip(&channel).for_each(|(v, c)| v[axis] = *c);
         }
     };
     filter_vectors(&mut out.position_m);
     filter_vectors(&mut out.force_n);
     filter_vectors(&mut out.torque_nm);
-    let mut coords: Vec<nalgebra::Vector4<f64>> =
-        out.orientation.iter().map(|q| q.coords).collect();
+    let mut coords: Vec<nalgebra::Vector4<f64>> = out.orientation.iter().map(|q| q.coords).collect();
     for axis in 0..4 {
-        channel
-            .iter_mut()
-            .zip(&coords)
-            .for_each(|(c, q)| *c = q[axis]);
+        channel.iter_mut().zip(&coords).for_each(|(c, q)| *c = q[axis]);
         section.filtfilt(&mut channel, pad, &mut scratch);
-        coords
-            .iter_mut()
-            .zip(&channel)
-            .for_each(|(q, c)| q[axis] = *c);
+        coords.iter_mut().zip(&channel).for_each(|(q, c)| q[axis] = *c);
     }
     for (q, c) in out.orientation.iter_mut().zip(&coords) {
         *q = UnitQuaternion::from_quaternion(Quaternion::from(*c));
@@ -195,15 +182,9 @@ mod tests {
         };
         Demo {
             source: "synthetic".into(),
-            position_m: t_s
-                .iter()
-                .map(|&t| Vector3::new(signal(t), 0.0, 0.0))
-                .collect(),
+            position_m: t_s.iter().map(|&t| Vector3::new(signal(t), 0.0, 0.0)).collect(),
             orientation: t_s.iter().map(|_| UnitQuaternion::identity()).collect(),
-            force_n: t_s
-                .iter()
-                .map(|&t| Vector3::new(0.0, 0.0, 10.0 + signal(t)))
-                .collect(),
+            force_n: t_s.iter().map(|&t| Vector3::new(0.0, 0.0, 10.0 + signal(t))).collect(),
             torque_nm: t_s.iter().map(|_| Vector3::zeros()).collect(),
             t_s,
         }
@@ -231,16 +212,9 @@ mod tests {
             // 40 Hz at 0.2 with a 5 Hz cut-off: the second order (run twice) leaves < 0.2 * (5/40)^4
             // inside, the first order < 0.2 * (5/40)^2; the ends keep some of the end noise.
             // The first order also damps the 0.5 Hz signal by 1 %.
-            let inside = if order == FilterOrder::First {
-                0.01
-            } else {
-                0.001
-            };
+            let inside = if order == FilterOrder::First { 0.01 } else { 0.001 };
             let (rms_inside, rms_all) = (rms(n / 20..n - n / 20), rms(0..n));
-            assert!(
-                rms_inside < inside,
-                "rate {rate_hz} {order:?}: rms inside {rms_inside}"
-            );
+            assert!(rms_inside < inside, "rate {rate_hz} {order:?}: rms inside {rms_inside}");
             assert!(rms_all < 0.012, "rate {rate_hz} {order:?}: rms {rms_all}");
         }
     }

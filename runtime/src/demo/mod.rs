@@ -285,9 +285,5 @@ pub enum DemoError {
 }
 
 fn list_columns(columns: &[String]) -> String {
-    columns
-        .iter()
-        .map(|c| format!("`{c}`"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    columns.iter().map(|c| format!("`{c}`")).collect::<Vec<_>>().join(", ")
 }

@@ -23,7 +23,15 @@ pub fn resample(demo: &Demo, rate_hz: f64) -> Result<Demo, DemoError> {
     }
     let t0 = demo.t_s[0];
     let duration = demo.duration_s();
-    let n_out = (duration * rate_hz + 1e-9).floor() as usize + 1;
+    let n_out_f = (duration * rate_hz + 1e-9).floor() + 1.0;
+    if n_out_f > 1e8 {
+        return Err(DemoError::InvalidParameter {
+            name: "resample_hz",
+            value: rate_hz,
+            reason: format!("would produce {n_out_f:.0} samples (at most 1e8)"),
+        });
+    }
+    let n_out = n_out_f as usize;
     let mut out = Demo {
         source: demo.source.clone(),
         t_s: Vec::with_capacity(n_out),
@@ -45,8 +53,7 @@ pub fn resample(demo: &Demo, rate_hz: f64) -> Result<Demo, DemoError> {
             .push(demo.position_m[seg].lerp(&demo.position_m[seg + 1], u));
         out.orientation
             .push(demo.orientation[seg].slerp(&demo.orientation[seg + 1], u));
-        out.force_n
-            .push(demo.force_n[seg].lerp(&demo.force_n[seg + 1], u));
+        out.force_n.push(demo.force_n[seg].lerp(&demo.force_n[seg + 1], u));
         out.torque_nm
             .push(demo.torque_nm[seg].lerp(&demo.torque_nm[seg + 1], u));
     }
@@ -61,24 +68,16 @@ mod tests {
 
     fn irregular_demo() -> Demo {
         let t_s: Vec<f64> = (0..200)
-            .map(|k| {
-                0.01 * k as f64 + 0.003 * ((k * 7 % 5) as f64 - 2.0) * f64::from(k > 0 && k < 199)
-            })
+            .map(|k| 0.01 * k as f64 + 0.003 * ((k * 7 % 5) as f64 - 2.0) * f64::from(k > 0 && k < 199))
             .collect();
         Demo {
             source: "synthetic".into(),
-            position_m: t_s
-                .iter()
-                .map(|&t| Vector3::new(2.0 * t, -t, 0.5))
-                .collect(),
+            position_m: t_s.iter().map(|&t| Vector3::new(2.0 * t, -t, 0.5)).collect(),
             orientation: t_s
                 .iter()
                 .map(|&t| UnitQuaternion::from_euler_angles(0.0, 0.0, t))
                 .collect(),
-            force_n: t_s
-                .iter()
-                .map(|&t| Vector3::new(0.0, 0.0, 3.0 * t))
-                .collect(),
+            force_n: t_s.iter().map(|&t| Vector3::new(0.0, 0.0, 3.0 * t)).collect(),
             torque_nm: t_s.iter().map(|_| Vector3::zeros()).collect(),
             t_s,
         }
@@ -94,9 +93,7 @@ mod tests {
             assert!((out.t_s[k] - k as f64 * 1e-3).abs() < 1e-9);
             assert!((out.position_m[k] - Vector3::new(2.0 * t, -t, 0.5)).norm() < 1e-12);
             assert!((out.force_n[k].z - 3.0 * t).abs() < 1e-12);
-            assert!(
-                out.orientation[k].angle_to(&UnitQuaternion::from_euler_angles(0.0, 0.0, t)) < 1e-9
-            );
+            assert!(out.orientation[k].angle_to(&UnitQuaternion::from_euler_angles(0.0, 0.0, t)) < 1e-9);
         }
     }
 

@@ -104,8 +104,16 @@ impl Basis {
         }
     }
 
-    /// The forcing term `Σ wᵢ ψᵢ(s) / Σ ψᵢ(s) · s`, using `scratch` ([`Basis::len`] entries).
+    /// The forcing term `Σ wᵢ ψᵢ(s) / Σ ψᵢ(s) · s`, using `scratch`; returns 0 when `weights`
+    /// or `scratch` have fewer than [`Basis::len`] entries.
     pub fn forcing(&self, weights: &[f64], s: f64, scratch: &mut [f64]) -> f64 {
+        if weights.len() < self.len()
+            || scratch.len() < self.len()
+            || self.widths.len() != self.len()
+            || self.is_empty()
+        {
+            return 0.0;
+        }
         let window = self.eval(s, scratch);
         let range = window.first..window.first + window.len;
         let (num, den) = scratch[range.clone()]

@@ -104,8 +104,8 @@ impl DmpConfig {
                 reason: reason.to_owned(),
             })
         };
-        if self.n_basis < 2 {
-            return bad("n_basis", "at least 2 basis functions are needed");
+        if !(2..=10_000).contains(&self.n_basis) {
+            return bad("n_basis", "between 2 and 10000 basis functions");
         }
         if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
             return bad("stiffness", "must be a positive number");

@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::basis::Basis;
 use super::canonical::CanonicalSystem;
 use super::fit::{fit_weights, Stencil};
+use super::rollout::consistent;
 use super::{check_times, DmpConfig, DmpError};
 
 /// `δ(q₁, q₂) = 2 log(q₂ ∗ q̄₁)`: the rotation vector taking `q₁` to `q₂` (base frame).
@@ -109,6 +110,13 @@ impl QuatDmp {
         })
     }
 
+    /// Checks internal consistency, e.g. after deserialising. Rollouts of an inconsistent DMP
+    /// do nothing.
+    pub fn validate(&self) -> Result<(), DmpError> {
+        self.config.validate()?;
+        super::trajectory::validate_parts(&self.basis, self.tau_s, &self.weights, 3)
+    }
+
     /// A rollout at the demonstrated start, goal and `τ`.
     pub fn rollout(&self) -> QuatRollout {
         QuatRollout {
@@ -199,7 +207,7 @@ impl QuatRollout {
 
     /// Advances by `dt_s` (steps longer than `0.02 τ / √K` are split).
     pub fn step(&mut self, dmp: &QuatDmp, dt_s: f64) {
-        if !(dt_s.is_finite() && dt_s > 0.0) {
+        if !(dt_s.is_finite() && dt_s > 0.0) || !consistent(&self.scratch, &dmp.basis, &dmp.weights, 3) {
             return;
         }
         let k = dmp.config.stiffness;

@@ -98,8 +98,10 @@ impl DmpRollout {
     }
 
     /// Advances by `dt_s` (semi-implicit Euler; steps longer than `0.02 τ / √K` are split).
+    /// `dmp` must be the DMP this rollout was made from; a step with a non-positive `dt_s` or an
+    /// inconsistent DMP (see [`Dmp::validate`]) does nothing.
     pub fn step(&mut self, dmp: &Dmp, dt_s: f64) {
-        if !(dt_s.is_finite() && dt_s > 0.0) {
+        if !(dt_s.is_finite() && dt_s > 0.0) || !consistent(&self.scratch, &dmp.basis, &dmp.weights, self.x.len()) {
             return;
         }
         let k = dmp.config.stiffness;
@@ -128,6 +130,13 @@ impl DmpRollout {
             self.t_s += h;
         }
     }
+}
+
+/// True when a rollout's buffers fit `basis` and `weights` (cheap; guards against a DMP that
+/// was deserialised inconsistently or is not the one the rollout was made from).
+pub(crate) fn consistent(scratch: &[f64], basis: &super::Basis, weights: &[Vec<f64>], n_dims: usize) -> bool {
+    let n = basis.len();
+    scratch.len() == n && basis.widths.len() == n && weights.len() == n_dims && weights.iter().all(|w| w.len() == n)
 }
 
 fn copy_checked(dst: &mut [f64], src: &[f64], what: &'static str) -> Result<(), DmpError> {

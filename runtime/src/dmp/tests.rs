@@ -269,7 +269,17 @@ fn dmp_round_trips_through_json() {
     let (t, p) = demo(100.0);
     let dmp = Dmp::fit_points(&DmpConfig::default(), &t, &p).expect("valid demo");
     let json = serde_json::to_string(&dmp).expect("serialisable");
-    let back: Dmp = serde_json::from_str(&json).expect("deserialisable");
+    let mut back: Dmp = serde_json::from_str(&json).expect("deserialisable");
     assert_eq!(back.weights.len(), 3);
+    back.validate().expect("consistent");
+    // A hand-edited file with a missing weight is rejected, and its rollout does not panic.
+    back.weights[1].pop();
+    assert!(matches!(
+        back.validate(),
+        Err(DmpError::LengthMismatch { what: "weights", .. })
+    ));
+    let mut rollout = back.rollout();
+    rollout.step(&back, 1e-3);
+    assert_eq!(rollout.position(), back.start.as_slice());
     assert!((back.tau_s - dmp.tau_s).abs() < 1e-12);
 }

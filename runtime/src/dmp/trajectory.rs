@@ -9,6 +9,44 @@ use super::fit::{fit_weights, Stencil};
 use super::rollout::DmpRollout;
 use super::{check_times, DmpConfig, DmpError};
 
+/// Shared consistency checks of a learned DMP's parts.
+pub(crate) fn validate_parts(basis: &Basis, tau_s: f64, weights: &[Vec<f64>], n_dims: usize) -> Result<(), DmpError> {
+    let n = basis.len();
+    if basis.widths.len() != n || n < 2 {
+        return Err(DmpError::LengthMismatch {
+            what: "basis.widths",
+            expected: n,
+            found: basis.widths.len(),
+        });
+    }
+    if !(tau_s.is_finite() && tau_s > 0.0) {
+        return Err(DmpError::InvalidConfig {
+            name: "tau_s",
+            reason: "must be a positive number of seconds".to_owned(),
+        });
+    }
+    if weights.len() != n_dims {
+        return Err(DmpError::LengthMismatch {
+            what: "weights",
+            expected: n_dims,
+            found: weights.len(),
+        });
+    }
+    for channel in weights {
+        if channel.len() != n {
+            return Err(DmpError::LengthMismatch {
+                what: "weights",
+                expected: n,
+                found: channel.len(),
+            });
+        }
+        if let Some(index) = channel.iter().position(|w| !w.is_finite()) {
+            return Err(DmpError::NonFinite { what: "weights", index });
+        }
+    }
+    Ok(())
+}
+
 /// A learned multi-channel DMP: one transformation system per channel, one canonical system.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Dmp {
@@ -89,6 +127,27 @@ impl Dmp {
         let channels: Vec<Vec<f64>> = (0..D).map(|axis| points.iter().map(|p| p[axis]).collect()).collect();
         let refs: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
         Self::fit(config, t_s, &refs)
+    }
+
+    /// Checks internal consistency (channel counts, basis sizes, finite values), e.g. after
+    /// deserialising a DMP from a file. Rollouts of an inconsistent DMP do nothing.
+    pub fn validate(&self) -> Result<(), DmpError> {
+        self.config.validate()?;
+        validate_parts(&self.basis, self.tau_s, &self.weights, self.start.len())?;
+        if self.goal.len() != self.start.len() {
+            return Err(DmpError::LengthMismatch {
+                what: "goal",
+                expected: self.start.len(),
+                found: self.goal.len(),
+            });
+        }
+        if let Some(index) = self.start.iter().chain(&self.goal).position(|v| !v.is_finite()) {
+            return Err(DmpError::NonFinite {
+                what: "start or goal",
+                index,
+            });
+        }
+        Ok(())
     }
 
     /// Number of channels.

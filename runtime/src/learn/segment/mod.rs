@@ -16,6 +16,8 @@ pub use self::touch::{split_at_force_peak, TouchConfig};
 
 use serde::{Deserialize, Serialize};
 
+use crate::demo::Demo;
+
 /// A contiguous run of samples `start..end` (0-based, end exclusive).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct Segment {
@@ -39,6 +41,53 @@ impl Segment {
     /// The sample range.
     pub fn range(&self) -> std::ops::Range<usize> {
         self.start..self.end
+    }
+
+    /// Start and end time [s]: the time of the first sample and of the last sample (so that
+    /// consecutive segments share their boundary time only when they share a sample).
+    pub fn times_s(&self, t_s: &[f64]) -> Option<(f64, f64)> {
+        let last = self.end.checked_sub(1)?;
+        Some((*t_s.get(self.start)?, *t_s.get(last)?))
+    }
+}
+
+/// How to segment a demonstration: the segmentation part of a learning plan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum Segmentation {
+    /// The whole demonstration is one segment.
+    None,
+    /// Agglomerative clustering with a temporal constraint.
+    Cluster(ClusterConfig),
+    /// CHAMP-style change-point detection.
+    Changepoint(ChangepointConfig),
+    /// Split at the force peak into approach and return (touch).
+    MaxForce(TouchConfig),
+}
+
+/// Segments `demo` as `plan` says. With `expected` set, a different number of segments is an
+/// error (the demonstration does not fit the template).
+pub fn segment_demo(demo: &Demo, plan: &Segmentation, expected: Option<usize>) -> Result<Vec<Segment>, SegmentError> {
+    let segments = match plan {
+        Segmentation::None => {
+            if demo.is_empty() {
+                return Err(SegmentError::TooFewSamples { found: 0, required: 1 });
+            }
+            vec![Segment {
+                start: 0,
+                end: demo.len(),
+            }]
+        }
+        Segmentation::Cluster(config) => cluster_demo(demo, config)?,
+        Segmentation::Changepoint(config) => changepoint_demo(demo, config)?.into_iter().map(|m| m.segment).collect(),
+        Segmentation::MaxForce(config) => split_at_force_peak(&demo.force_n, config)?.to_vec(),
+    };
+    match expected {
+        Some(count) if segments.len() != count => Err(SegmentError::WrongCount {
+            found: segments.len(),
+            expected: count,
+        }),
+        _ => Ok(segments),
     }
 }
 
@@ -84,6 +133,14 @@ pub enum SegmentError {
         what: &'static str,
         /// 0-based sample index.
         index: usize,
+    },
+    /// The segmentation found a different number of segments than the template expects.
+    #[error("found {found} segment(s), the template expects {expected}")]
+    WrongCount {
+        /// Segments found.
+        found: usize,
+        /// Segments expected.
+        expected: usize,
     },
     /// The force never exceeds the contact threshold.
     #[error("no contact: the peak force {peak_n:.3} N stays below the threshold `{threshold_n}` N")]

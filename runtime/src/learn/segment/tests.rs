@@ -216,3 +216,38 @@ fn touch_splits_at_the_force_peak() {
         Err(SegmentError::NoContact { .. })
     ));
 }
+
+#[test]
+fn segmentation_plan_dispatches_and_checks_the_count() {
+    let t_s: Vec<f64> = (0..3000).map(|k| k as f64 * 1e-3).collect();
+    let mut rng = Rng::new(10);
+    let demo = crate::demo::Demo {
+        source: "synthetic".into(),
+        position_m: t_s
+            .iter()
+            .map(|&t| Vector3::new(0.1 * t, 0.0, 0.3) + rng.vector(1e-4))
+            .collect(),
+        orientation: vec![nalgebra::UnitQuaternion::identity(); 3000],
+        force_n: t_s
+            .iter()
+            .map(|&t| Vector3::new(0.0, 0.0, if (1.0..2.0).contains(&t) { 10.0 } else { 0.0 }) + rng.vector(0.2))
+            .collect(),
+        torque_nm: vec![Vector3::zeros(); 3000],
+        t_s,
+    };
+    let plan = Segmentation::Cluster(ClusterConfig::default());
+    let segments = segment_demo(&demo, &plan, Some(3)).expect("three segments");
+    assert_breaks(&segments, &[1000, 2000], 5, "plan cluster");
+    assert_eq!(
+        segments[1].times_s(&demo.t_s),
+        Some((segments[1].start as f64 * 1e-3, (segments[1].end - 1) as f64 * 1e-3))
+    );
+    let err = segment_demo(&demo, &plan, Some(4)).expect_err("four were expected");
+    assert_eq!(err.to_string(), "found 3 segment(s), the template expects 4");
+    let touch = segment_demo(&demo, &Segmentation::MaxForce(TouchConfig::default()), Some(2)).expect("two");
+    assert!((1000..2000).contains(&touch[0].end));
+    let json = serde_json::to_string(&plan).expect("serialisable");
+    let back: Segmentation = serde_json::from_str(&json).expect("round trip");
+    assert_eq!(back, plan);
+    assert_eq!(segment_demo(&demo, &Segmentation::None, None).expect("one").len(), 1);
+}

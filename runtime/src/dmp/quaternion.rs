@@ -207,7 +207,8 @@ impl QuatRollout {
 
     /// Advances by `dt_s` (steps longer than `0.02 τ / √K` are split).
     pub fn step(&mut self, dmp: &QuatDmp, dt_s: f64) {
-        if !(dt_s.is_finite() && dt_s > 0.0) || !consistent(&self.scratch, &dmp.basis, &dmp.weights, 3) {
+        let usable = dt_s.is_finite() && dt_s > 0.0 && consistent(&self.scratch, &dmp.basis, &dmp.weights, 3);
+        if !usable {
             return;
         }
         let k = dmp.config.stiffness;

@@ -101,7 +101,9 @@ impl DmpRollout {
     /// `dmp` must be the DMP this rollout was made from; a step with a non-positive `dt_s` or an
     /// inconsistent DMP (see [`Dmp::validate`]) does nothing.
     pub fn step(&mut self, dmp: &Dmp, dt_s: f64) {
-        if !(dt_s.is_finite() && dt_s > 0.0) || !consistent(&self.scratch, &dmp.basis, &dmp.weights, self.x.len()) {
+        let usable =
+            dt_s.is_finite() && dt_s > 0.0 && consistent(&self.scratch, &dmp.basis, &dmp.weights, self.x.len());
+        if !usable {
             return;
         }
         let k = dmp.config.stiffness;

@@ -81,11 +81,28 @@ pub enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Learn a skill template's features from one demonstration.
+    #[command(after_help = "Examples:
+  skillc learn stdlib-skills/press.skill examples/demos/press.csv -o press.learned.json
+  skillc learn my.skill demo.csv -o my.learned.json --skill wipe --lowpass 20")]
+    Learn(crate::learn_cmd::LearnArgs),
     /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.
     #[command(after_help = "Examples:
   skillc robot examples/robots/lwr4.urdf
   skillc robot examples/robots/lwr4.urdf --tool probe_tip --q 0,-0.5,0,1.5,0,-1.14,0 --json")]
     Robot(crate::robot_cmd::RobotArgs),
+    /// Write the shipped synthetic demonstrations (and their ground truth) of the standard skills.
+    #[command(after_help = "Examples:
+  skillc demos                      # rewrite examples/demos/
+  skillc demos --check              # fail if the shipped files differ from the generator")]
+    Demos {
+        /// Where to write `<skill>.csv` and `<skill>.truth.json`.
+        #[arg(long, default_value = "examples/demos")]
+        out: PathBuf,
+        /// Only compare with what is there; write nothing.
+        #[arg(long)]
+        check: bool,
+    },
     /// Print an intermediate stage (the output format may change between versions).
     Dump {
         /// The stage to print.
@@ -131,6 +148,8 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Graph { file, format, output } => graph(&file, format, output.as_deref()),
         Command::Fmt { files, check } => fmt(&files, check),
         Command::Dump { stage, file } => dump(&file, stage),
+        Command::Demos { out, check } => demos(&out, check),
+        Command::Learn(args) => crate::learn_cmd::run(&args),
         Command::Robot(args) => match crate::robot_cmd::run(&args) {
             Ok(()) => 0,
             Err(err) => usage_error(err),
@@ -322,4 +341,44 @@ fn dump(path: &Path, stage: Stage) -> u8 {
         }
         Stage::Ir => compile(path, None),
     }
+}
+
+fn demos(out: &Path, check_only: bool) -> u8 {
+    use skill_runtime::demogen::{generate, to_csv, StdSkill};
+    if !check_only {
+        if let Err(err) = std::fs::create_dir_all(out) {
+            return usage_error(format!("cannot create `{}`: {err}", out.display()));
+        }
+    }
+    let mut status = 0;
+    for skill in StdSkill::ALL {
+        let demo = generate(skill, skill.default_seed());
+        let truth = match serde_json::to_string_pretty(&demo.truth) {
+            Ok(json) => json + "\n",
+            Err(err) => return usage_error(format!("cannot serialise the ground truth: {err}")),
+        };
+        for (path, text) in [
+            (out.join(format!("{}.csv", skill.name())), to_csv(&demo)),
+            (out.join(format!("{}.truth.json", skill.name())), truth),
+        ] {
+            if check_only {
+                match std::fs::read_to_string(&path) {
+                    Ok(existing) if existing == text => {}
+                    Ok(_) => {
+                        println!("`{}` differs from the generator", path.display());
+                        status = 1;
+                    }
+                    Err(err) => {
+                        println!("`{}` cannot be read: {err}", path.display());
+                        status = 1;
+                    }
+                }
+            } else if let Err(err) = atomic::write(&path, text.as_bytes()) {
+                return usage_error(format!("cannot write `{}`: {err}", path.display()));
+            } else {
+                println!("wrote `{}` ({} samples)", path.display(), demo.samples.len());
+            }
+        }
+    }
+    status
 }

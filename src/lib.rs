@@ -5,6 +5,7 @@
 pub mod atomic;
 pub mod cli;
 pub mod frontend;
+pub mod learn_cmd;
 pub mod render;
 pub mod robot_cmd;
 

@@ -7,3 +7,7 @@ pub mod plant;
 pub mod sim;
 pub mod learn;
 pub mod control;
+pub mod demogen;
+pub mod rng;
+pub mod skill;
+pub mod exec;

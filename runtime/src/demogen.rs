@@ -1,0 +1,590 @@
+//! Synthetic kinesthetic demonstrations of the four standard skills, made the way a person
+//! guides the arm, in the geometry of the shipped scenes (`examples/scenes/`), with the ground
+//! truth written beside each so tests and benches know the right answers.
+//!
+//! What imitates a person:
+//! - minimum-jerk reaching between waypoints, with each phase's speed profile warped at random
+//!   (a person neither moves at constant speed nor repeats a timing);
+//! - hand tremor (about 0.15 mm at 8-11 Hz) and slow wander in free space; in contact only the
+//!   tangential part remains, the surface holds the normal;
+//! - touch-down overshoot of the normal force and a lift-off ramp, slow force variation while
+//!   pressing, Coulomb friction against the sliding direction;
+//! - wrist sensor noise (0.15 N, 4 mN m white) and a constant bias (about 0.2 N).
+//!
+//! Columns follow SPEC §3: the flange pose in the base frame and the wrench the environment
+//! exerts on the tool, in the base frame, with the moment about the flange (sensor origin).
+//! The flange-to-tip offset and the starting orientation come from the bundled LWR-IV model at
+//! the scenes' start configuration, so a demonstration and a reproduction share one geometry.
+
+use nalgebra::{UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+
+use crate::rng::SplitMix64;
+use crate::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
+
+/// The scenes' start configuration [rad] (`examples/scenes/*.toml`, `robot.q0`).
+pub const SCENE_Q0: [f64; 7] = [0.0, -0.5, 0.0, 1.5, 0.0, -1.141_592_653_589_793_1, 0.0];
+
+/// Radius of the probe's spherical tip [m].
+pub const TIP_RADIUS_M: f64 = 0.01;
+
+/// Sampling rate of the generated demonstrations [Hz].
+pub const RATE_HZ: f64 = 1000.0;
+
+/// Height of the table top, the button cap and the drum's top in the shipped scenes [m].
+pub const SURFACE_Z_M: f64 = 0.300;
+
+/// The four standard skills.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StdSkill {
+    /// Touch the table and come back.
+    Touch,
+    /// Press the spring-loaded button.
+    Press,
+    /// Slide over the table at a constant force.
+    Slide,
+    /// Follow the drum's curved surface with a varying force.
+    Contour,
+}
+
+impl StdSkill {
+    /// All four, in the order the thesis presents them last to first.
+    pub const ALL: [StdSkill; 4] = [StdSkill::Touch, StdSkill::Press, StdSkill::Slide, StdSkill::Contour];
+
+    /// The skill's name (also its file stem).
+    pub fn name(self) -> &'static str {
+        match self {
+            StdSkill::Touch => "touch",
+            StdSkill::Press => "press",
+            StdSkill::Slide => "slide",
+            StdSkill::Contour => "contour",
+        }
+    }
+
+    /// The shipped scene it is demonstrated in.
+    pub fn scene(self) -> &'static str {
+        match self {
+            StdSkill::Touch | StdSkill::Slide => "table.toml",
+            StdSkill::Press => "button.toml",
+            StdSkill::Contour => "cylinder.toml",
+        }
+    }
+
+    /// The seed of the shipped demonstration.
+    pub fn default_seed(self) -> u64 {
+        match self {
+            StdSkill::Touch => 11,
+            StdSkill::Press => 12,
+            StdSkill::Slide => 13,
+            StdSkill::Contour => 14,
+        }
+    }
+}
+
+/// One sample of a demonstration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Time [s].
+    pub t_s: f64,
+    /// Flange position, base frame [m].
+    pub position_m: Vector3<f64>,
+    /// Flange orientation, base frame.
+    pub orientation: UnitQuaternion<f64>,
+    /// Force the environment exerts on the tool, base frame [N].
+    pub force_n: Vector3<f64>,
+    /// Moment of that force about the flange, base frame [N m].
+    pub torque_nm: Vector3<f64>,
+}
+
+/// A segment of the ground truth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TruthSegment {
+    /// What the person was doing.
+    pub label: String,
+    /// Start [s].
+    pub start_s: f64,
+    /// End [s].
+    pub end_s: f64,
+}
+
+/// The surface touched, in the base frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum TruthSurface {
+    /// A plane: a point on it and its outward normal.
+    Plane {
+        /// A point on the plane [m].
+        point_m: [f64; 3],
+        /// Outward normal (from the surface towards the tool).
+        normal: [f64; 3],
+    },
+    /// A cylinder: a point on its axis, the axis direction and the radius.
+    Cylinder {
+        /// A point on the axis [m].
+        axis_point_m: [f64; 3],
+        /// Unit axis direction.
+        axis: [f64; 3],
+        /// Radius [m].
+        radius_m: f64,
+    },
+}
+
+/// What the generator knows about a demonstration: the answers learning should find.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroundTruth {
+    /// The skill.
+    pub skill: StdSkill,
+    /// The scene file it matches.
+    pub scene: String,
+    /// The generator seed.
+    pub seed: u64,
+    /// Sampling rate [Hz].
+    pub rate_hz: f64,
+    /// The probe tip centre in the flange frame [m].
+    pub tip_in_flange_m: [f64; 3],
+    /// Tip radius [m].
+    pub tip_radius_m: f64,
+    /// Phases in time order.
+    pub segments: Vec<TruthSegment>,
+    /// The surface.
+    pub surface: TruthSurface,
+    /// The characteristic applied force [N]: the constant force (slide), the peak (touch,
+    /// press) or the mean along the normal while contouring.
+    pub force_n: f64,
+    /// Time of the force peak [s] (touch: the contact point).
+    pub peak_time_s: f64,
+    /// Coulomb friction coefficient used.
+    pub friction: f64,
+    /// Standard deviation of the sensor's force noise [N].
+    pub sensor_noise_n: f64,
+    /// The constant sensor bias added to the force [N].
+    pub sensor_bias_n: [f64; 3],
+}
+
+/// A generated demonstration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Demonstration {
+    /// Samples at [`RATE_HZ`].
+    pub samples: Vec<Sample>,
+    /// What it contains.
+    pub truth: GroundTruth,
+}
+
+/// The tool geometry at the scenes' start configuration.
+struct Tool {
+    orientation: UnitQuaternion<f64>,
+    tip_in_flange: Vector3<f64>,
+}
+
+fn tool() -> Tool {
+    let robot = Robot::from_urdf_str(LWR4_URDF, Some(LWR4_TOOL)).expect("the bundled URDF loads");
+    let flange = robot.require_link(LWR4_FLANGE).expect("the bundled URDF has a flange");
+    let mut data = robot.data();
+    robot.forward_kinematics(&mut data, &SCENE_Q0);
+    let flange_pose = robot.link_in_base(&data, flange);
+    let tip = robot.tool_in_base(&data);
+    Tool {
+        orientation: flange_pose.rotation,
+        tip_in_flange: flange_pose.inverse_transform_point(&tip.translation.vector.into()).coords,
+    }
+}
+
+/// Minimum-jerk progress `10u³ − 15u⁴ + 6u⁵` on `[0, 1]`.
+fn min_jerk(u: f64) -> f64 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
+}
+
+/// A monotone random warp of `[0, 1]` onto itself: people do not move at a steady pace.
+fn warp(u: f64, amount: f64) -> f64 {
+    u + amount * (2.0 * PI * u).sin() / (2.0 * PI)
+}
+
+/// A smooth random signal: a few sinusoids with random phases.
+#[derive(Debug, Clone)]
+struct Wobble {
+    terms: Vec<(f64, f64, Vector3<f64>)>,
+}
+
+impl Wobble {
+    fn new(rng: &mut SplitMix64, amplitude: f64, low_hz: f64, high_hz: f64, count: usize) -> Self {
+        let terms = (0..count)
+            .map(|_| {
+                let direction = Vector3::new(rng.normal(), rng.normal(), rng.normal());
+                let direction = direction / direction.norm().max(1e-9);
+                (rng.range(low_hz, high_hz), rng.range(0.0, 2.0 * PI), direction * amplitude / (count as f64).sqrt())
+            })
+            .collect();
+        Wobble { terms }
+    }
+
+    fn at(&self, t: f64) -> Vector3<f64> {
+        self.terms.iter().map(|(hz, phase, v)| v * (2.0 * PI * hz * t + phase).sin()).sum()
+    }
+}
+
+/// The state of the tip at one instant, before noise and the flange transform.
+#[derive(Debug, Clone, Copy)]
+struct TipState {
+    /// Tip centre [m].
+    position: Vector3<f64>,
+    /// Outward surface normal at the contact (meaningful when `normal_force > 0`).
+    normal: Vector3<f64>,
+    /// Normal force the surface exerts on the tool [N] (0 in free space).
+    normal_force: f64,
+}
+
+/// A phase of the demonstration: a duration and the tip state over local progress `u ∈ [0, 1]`.
+struct Phase {
+    label: &'static str,
+    duration_s: f64,
+    state: Box<dyn Fn(f64, f64) -> TipState>,
+}
+
+fn free(from: Vector3<f64>, to: Vector3<f64>, warp_amount: f64) -> Box<dyn Fn(f64, f64) -> TipState> {
+    Box::new(move |u, _t| TipState {
+        position: from + (to - from) * min_jerk(warp(u, warp_amount)),
+        normal: Vector3::z(),
+        normal_force: 0.0,
+    })
+}
+
+/// Generates the demonstration of `skill` with `seed`.
+pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
+    let mut rng = SplitMix64::new(seed);
+    let tool = tool();
+    let contact_z = SURFACE_Z_M + TIP_RADIUS_M;
+    let warp_of = |rng: &mut SplitMix64| rng.range(-0.15, 0.15);
+    let mut phases: Vec<Phase> = Vec::new();
+    let surface;
+    let friction;
+    let force_n;
+    let up = Vector3::z();
+
+    match skill {
+        StdSkill::Slide => {
+            friction = 0.4;
+            let f0 = 10.0;
+            force_n = f0;
+            let hover = Vector3::new(0.48, -0.08, 0.365);
+            let c1 = Vector3::new(0.48, -0.08, contact_z);
+            let c2 = Vector3::new(0.62, 0.07, contact_z);
+            let leave = Vector3::new(0.64, 0.09, 0.37);
+            let (w1, w2, w3) = (warp_of(&mut rng), warp_of(&mut rng), warp_of(&mut rng));
+            let slow_phase = rng.range(0.0, 2.0 * PI);
+            let settle = 0.25;
+            let slide_s = rng.range(4.0, 4.4);
+            let contact_s = settle + slide_s + settle;
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
+            phases.push(Phase { label: "approach", duration_s: rng.range(1.5, 1.8), state: free(hover, c1, w1) });
+            phases.push(Phase {
+                label: "slide",
+                duration_s: contact_s,
+                state: Box::new(move |u, t| {
+                    let local = u * contact_s;
+                    let s = ((local - settle) / slide_s).clamp(0.0, 1.0);
+                    let progress = min_jerk(warp(s, w2));
+                    let lateral = Vector3::new(0.0, 0.02 * (PI * progress).sin(), 0.0);
+                    let position = c1 + (c2 - c1) * progress + lateral;
+                    let mut force = touch_down_lift_off(local, contact_s, f0);
+                    force *= 1.0 + 0.04 * (2.0 * PI * 0.7 * t + slow_phase).sin();
+                    TipState { position, normal: up, normal_force: force }
+                }),
+            });
+            phases.push(Phase { label: "leave", duration_s: rng.range(1.4, 1.7), state: free(c2, leave, w3) });
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(leave, leave, 0.0) });
+            surface = TruthSurface::Plane { point_m: [0.55, 0.0, SURFACE_Z_M], normal: [0.0, 0.0, 1.0] };
+        }
+        StdSkill::Touch => {
+            friction = 0.4;
+            let peak = 4.0;
+            force_n = peak;
+            let hover = Vector3::new(0.5466, 0.0, 0.37);
+            let contact = Vector3::new(0.5466, 0.0, contact_z);
+            let back = Vector3::new(0.5466, 0.02, 0.37);
+            let (w1, w2) = (warp_of(&mut rng), warp_of(&mut rng));
+            let (rise, fall) = (rng.range(0.08, 0.1), rng.range(0.1, 0.12));
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
+            phases.push(Phase { label: "approach", duration_s: rng.range(2.0, 2.3), state: free(hover, contact, w1) });
+            phases.push(Phase {
+                label: "touch",
+                duration_s: rise + fall,
+                state: Box::new(move |u, _t| {
+                    let local = u * (rise + fall);
+                    let force = if local < rise {
+                        peak * 0.5 * (1.0 - (PI * local / rise).cos())
+                    } else {
+                        peak * 0.5 * (1.0 + (PI * (local - rise) / fall).cos())
+                    };
+                    TipState { position: contact, normal: up, normal_force: force }
+                }),
+            });
+            phases.push(Phase { label: "return", duration_s: rng.range(1.9, 2.2), state: free(contact, back, w2) });
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(back, back, 0.0) });
+            surface = TruthSurface::Plane { point_m: [0.5466, 0.0, SURFACE_Z_M], normal: [0.0, 0.0, 1.0] };
+        }
+        StdSkill::Press => {
+            friction = 0.6;
+            let peak = 8.0;
+            force_n = peak;
+            // The button of `button.toml`: 2 N preload, 400 N/m, 8 mm of travel.
+            let (preload, stiffness, travel) = (2.0, 400.0, 0.008);
+            let hover = Vector3::new(0.5466, 0.0, 0.37);
+            let contact = Vector3::new(0.5466, 0.0, contact_z);
+            let back = Vector3::new(0.5466, -0.02, 0.37);
+            let (w1, w2) = (warp_of(&mut rng), warp_of(&mut rng));
+            let (rise, hold, release) = (rng.range(0.8, 1.0), rng.range(0.7, 0.9), rng.range(0.9, 1.1));
+            let total = rise + hold + release;
+            let wobble_phase = rng.range(0.0, 2.0 * PI);
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
+            phases.push(Phase { label: "approach", duration_s: rng.range(1.9, 2.2), state: free(hover, contact, w1) });
+            phases.push(Phase {
+                label: "press",
+                duration_s: total,
+                state: Box::new(move |u, t| {
+                    let local = u * total;
+                    let mut force = if local < rise {
+                        peak * min_jerk(local / rise)
+                    } else if local < rise + hold {
+                        peak * (1.0 + 0.03 * (2.0 * PI * 1.3 * t + wobble_phase).sin())
+                    } else {
+                        peak * (1.0 - min_jerk((local - rise - hold) / release))
+                    };
+                    force = force.max(0.0);
+                    let depth = ((force - preload) / stiffness).clamp(0.0, travel);
+                    TipState { position: contact - up * depth, normal: up, normal_force: force }
+                }),
+            });
+            phases.push(Phase { label: "retract", duration_s: rng.range(1.5, 1.8), state: free(contact, back, w2) });
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(back, back, 0.0) });
+            surface = TruthSurface::Plane { point_m: [0.5466, 0.0, SURFACE_Z_M], normal: [0.0, 0.0, 1.0] };
+        }
+        StdSkill::Contour => {
+            friction = 0.3;
+            // The drum of `cylinder.toml`: axis along y through (0.5466, ·, 0.15), radius 0.15 m.
+            let centre = Vector3::new(0.5466, 0.0, 0.15);
+            let radius = 0.15 + TIP_RADIUS_M;
+            let (start_angle, end_angle) = (-30f64.to_radians(), 30f64.to_radians());
+            let radial = move |angle: f64| Vector3::new(angle.sin(), 0.0, angle.cos());
+            let hover = centre + radial(start_angle) * (radius + 0.06);
+            let c1 = centre + radial(start_angle) * radius;
+            let c2 = centre + radial(end_angle) * radius;
+            let leave = centre + radial(end_angle) * (radius + 0.06);
+            let (w1, w2, w3) = (warp_of(&mut rng), warp_of(&mut rng), warp_of(&mut rng));
+            let settle = 0.25;
+            let follow_s = rng.range(4.8, 5.2);
+            let contact_s = settle + follow_s + settle;
+            let (base, swing) = (7.0, 3.0);
+            // Mean of base + swing·sin(π s) over the contour.
+            force_n = base + swing * 2.0 / PI;
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
+            phases.push(Phase { label: "approach", duration_s: rng.range(1.5, 1.8), state: free(hover, c1, w1) });
+            phases.push(Phase {
+                label: "contour",
+                duration_s: contact_s,
+                state: Box::new(move |u, _t| {
+                    let local = u * contact_s;
+                    let s = ((local - settle) / follow_s).clamp(0.0, 1.0);
+                    let progress = min_jerk(warp(s, w2));
+                    let angle = start_angle + (end_angle - start_angle) * progress;
+                    let normal = radial(angle);
+                    let mut position = centre + normal * radius;
+                    position.y = 0.01 * (PI * progress).sin();
+                    let profile = base + swing * (PI * s).sin();
+                    let force = touch_down_lift_off(local, contact_s, 1.0) * profile;
+                    TipState { position, normal, normal_force: force }
+                }),
+            });
+            phases.push(Phase { label: "leave", duration_s: rng.range(1.4, 1.7), state: free(c2, leave, w3) });
+            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(leave, leave, 0.0) });
+            surface = TruthSurface::Cylinder { axis_point_m: centre.into(), axis: [0.0, 1.0, 0.0], radius_m: 0.15 };
+        }
+    }
+
+    // Person and sensor imperfections.
+    let tremor = Wobble::new(&mut rng, 0.15e-3, 8.0, 11.0, 3);
+    let wander = Wobble::new(&mut rng, 0.4e-3, 0.2, 0.6, 2);
+    let wrist = Wobble::new(&mut rng, 0.2f64.to_radians(), 6.0, 9.0, 2);
+    let drift = Wobble::new(&mut rng, 0.5f64.to_radians(), 0.1, 0.3, 2);
+    let force_noise = 0.15;
+    let torque_noise = 0.004;
+    let bias = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.2;
+    let torque_bias = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.005;
+
+    let dt = 1.0 / RATE_HZ;
+    let mut samples = Vec::new();
+    let mut segments = Vec::new();
+    let mut t0 = 0.0;
+    let mut previous_tip: Option<Vector3<f64>> = None;
+    let mut peak = (0.0f64, 0.0f64);
+    for phase in &phases {
+        let n = (phase.duration_s * RATE_HZ).round() as usize;
+        let start_s = t0;
+        for k in 0..n {
+            let t = t0 + k as f64 * dt;
+            let u = k as f64 / n as f64;
+            let state = (phase.state)(u, t);
+            let in_contact = state.normal_force > 0.0;
+            // In contact, static friction holds the tip against the hand's tremor: the tremor
+            // shows in the force instead, and only the intended path slides.
+            let shake = if in_contact { Vector3::zeros() } else { tremor.at(t) + wander.at(t) };
+            let tip = state.position + shake;
+            let velocity = previous_tip.map_or(Vector3::zeros(), |p| (tip - p) / dt);
+            previous_tip = Some(tip);
+            let tangential = velocity - state.normal * state.normal.dot(&velocity);
+            let friction_force = -tangential * (friction * state.normal_force / tangential.norm().max(0.005));
+            let hand = if in_contact { tremor.at(t) * (state.normal_force * 400.0) } else { Vector3::zeros() };
+            let force = state.normal * state.normal_force + friction_force + hand;
+            if state.normal_force > peak.1 {
+                peak = (t, state.normal_force);
+            }
+            let rotation_vector = wrist.at(t) + drift.at(t);
+            let orientation = UnitQuaternion::from_scaled_axis(rotation_vector) * tool.orientation;
+            let flange = tip - orientation * tool.tip_in_flange;
+            let contact_point = tip - state.normal * TIP_RADIUS_M;
+            let torque = (contact_point - flange).cross(&force);
+            let noise = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * force_noise;
+            let torque_noise_v = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * torque_noise;
+            samples.push(Sample {
+                t_s: t,
+                position_m: flange,
+                orientation,
+                force_n: force + bias + noise,
+                torque_nm: torque + torque_bias + torque_noise_v,
+            });
+        }
+        t0 += n as f64 * dt;
+        if phase.label != "rest" {
+            segments.push(TruthSegment { label: phase.label.to_string(), start_s, end_s: t0 });
+        }
+    }
+    // The rests belong to the neighbouring motion: the first to the approach, the last to the leaving.
+    if let Some(first) = segments.first_mut() {
+        first.start_s = 0.0;
+    }
+    if let Some(last) = segments.last_mut() {
+        last.end_s = t0 - dt;
+    }
+
+    Demonstration {
+        samples,
+        truth: GroundTruth {
+            skill,
+            scene: skill.scene().to_string(),
+            seed,
+            rate_hz: RATE_HZ,
+            tip_in_flange_m: tool.tip_in_flange.into(),
+            tip_radius_m: TIP_RADIUS_M,
+            segments,
+            surface,
+            force_n,
+            peak_time_s: peak.0,
+            friction,
+            sensor_noise_n: force_noise,
+            sensor_bias_n: bias.into(),
+        },
+    }
+}
+
+/// The normal force profile of a contact phase of length `total`: a touch-down overshoot of
+/// 35 % decaying in about 80 ms, the steady `level`, and a 150 ms lift-off ramp.
+fn touch_down_lift_off(local: f64, total: f64, level: f64) -> f64 {
+    let rise = 0.06;
+    let lift = 0.15;
+    let envelope = if local < rise {
+        0.5 * (1.0 - (PI * local / rise).cos()) * 1.35
+    } else {
+        1.0 + 0.35 * (-(local - rise) / 0.08).exp()
+    };
+    let release = if local > total - lift { ((total - local) / lift).clamp(0.0, 1.0) } else { 1.0 };
+    level * envelope * release
+}
+
+/// The demonstration as CSV with the SPEC §3 columns (6 decimals: µm, µN).
+pub fn to_csv(demo: &Demonstration) -> String {
+    let mut out = String::with_capacity(demo.samples.len() * 120);
+    out.push_str("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n");
+    for sample in &demo.samples {
+        let q = sample.orientation.quaternion();
+        let _ = writeln!(
+            out,
+            "{:.4},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
+            sample.t_s,
+            sample.position_m.x,
+            sample.position_m.y,
+            sample.position_m.z,
+            q.w,
+            q.i,
+            q.j,
+            q.k,
+            sample.force_n.x,
+            sample.force_n.y,
+            sample.force_n.z,
+            sample.torque_nm.x,
+            sample.torque_nm.y,
+            sample.torque_nm.z,
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generation_is_deterministic_and_seed_dependent() {
+        let a = generate(StdSkill::Slide, 5);
+        let b = generate(StdSkill::Slide, 5);
+        let c = generate(StdSkill::Slide, 6);
+        assert_eq!(to_csv(&a), to_csv(&b));
+        assert_ne!(to_csv(&a), to_csv(&c));
+    }
+
+    #[test]
+    fn the_tip_stays_on_the_surface_while_the_force_is_on() {
+        for skill in StdSkill::ALL {
+            let demo = generate(skill, skill.default_seed());
+            let tip_offset = Vector3::from(demo.truth.tip_in_flange_m);
+            for sample in &demo.samples {
+                let tip = sample.position_m + sample.orientation * tip_offset;
+                let normal_force = (sample.force_n - Vector3::from(demo.truth.sensor_bias_n)).norm();
+                let gap = match &demo.truth.surface {
+                    TruthSurface::Plane { point_m, normal } => {
+                        (tip - Vector3::from(*point_m)).dot(&Vector3::from(*normal)) - TIP_RADIUS_M
+                    }
+                    TruthSurface::Cylinder { axis_point_m, radius_m, .. } => {
+                        let d = tip - Vector3::from(*axis_point_m);
+                        (d.x * d.x + d.z * d.z).sqrt() - radius_m - TIP_RADIUS_M
+                    }
+                };
+                assert!(gap > -0.0085, "{skill:?}: the tip goes {gap} m into the surface at {}", sample.t_s);
+                if normal_force > 3.0 && skill != StdSkill::Press {
+                    assert!(gap.abs() < 1e-3, "{skill:?}: pressing {normal_force} N while {gap} m away at {}", sample.t_s);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn ground_truth_segments_cover_the_demonstration_in_order() {
+        for skill in StdSkill::ALL {
+            let demo = generate(skill, skill.default_seed());
+            let segments = &demo.truth.segments;
+            let expected = match skill {
+                StdSkill::Touch => 2 + 1,
+                _ => 3,
+            };
+            assert_eq!(segments.len(), expected, "{skill:?}");
+            assert_eq!(segments[0].start_s, 0.0);
+            for pair in segments.windows(2) {
+                assert!((pair[0].end_s - pair[1].start_s).abs() < 1e-9);
+            }
+            let last = demo.samples.last().expect("samples").t_s;
+            assert!((segments[segments.len() - 1].end_s - last).abs() < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! The per-tick log of a run and its CSV export.
+
+use std::fmt::Write as _;
+
+/// One control tick.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tick {
+    /// Time since the run started [s].
+    pub t_s: f64,
+    /// Index into [`RunLog::states`].
+    pub state: u32,
+    /// Commanded tool position [m] and orientation `[w, x, y, z]`, base frame.
+    pub desired: [f64; 7],
+    /// Measured tool position [m] and orientation `[w, x, y, z]`, base frame.
+    pub measured: [f64; 7],
+    /// Applied wrench at the tool point, base frame `[f; m]` (N, N m).
+    pub wrench_base: [f64; 6],
+    /// The same wrench in the compliant frame's axes.
+    pub wrench_cf: [f64; 6],
+    /// Desired applied wrench in the compliant frame's axes (zero on position axes).
+    pub desired_cf: [f64; 6],
+    /// The compliant frame's z axis, base frame.
+    pub frame_z: [f64; 3],
+    /// Position-controlled axes as bits (bit i = axis i of `x y z rx ry rz`).
+    pub selection: u8,
+    /// Commanded joint torques after limits [N m].
+    pub torques: Vec<f64>,
+}
+
+/// Every tick of a run, with the names of the states ticks refer to.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RunLog {
+    /// State names (`prepose`, `replay:<motion>` and the skill's states).
+    pub states: Vec<String>,
+    /// The ticks in time order.
+    pub ticks: Vec<Tick>,
+}
+
+impl RunLog {
+    /// The index of a state name, added if new.
+    pub fn state_index(&mut self, name: &str) -> u32 {
+        match self.states.iter().position(|s| s == name) {
+            Some(index) => index as u32,
+            None => {
+                self.states.push(name.to_string());
+                (self.states.len() - 1) as u32
+            }
+        }
+    }
+
+    /// The log as CSV, one row per tick.
+    pub fn to_csv(&self) -> String {
+        let dof = self.ticks.first().map_or(0, |t| t.torques.len());
+        let mut out = String::with_capacity(self.ticks.len() * 400);
+        out.push_str("t,state,xd,yd,zd,qwd,qxd,qyd,qzd,x,y,z,qw,qx,qy,qz,fx,fy,fz,mx,my,mz,");
+        out.push_str("cf_fx,cf_fy,cf_fz,cf_mx,cf_my,cf_mz,cf_fx_d,cf_fy_d,cf_fz_d,cf_mx_d,cf_my_d,cf_mz_d,");
+        out.push_str("cf_zx,cf_zy,cf_zz,sel_x,sel_y,sel_z,sel_rx,sel_ry,sel_rz");
+        for joint in 1..=dof {
+            let _ = write!(out, ",tau{joint}");
+        }
+        out.push('\n');
+        for tick in &self.ticks {
+            let _ = write!(out, "{:.4},{}", tick.t_s, self.states[tick.state as usize]);
+            for value in tick.desired.iter().chain(&tick.measured) {
+                let _ = write!(out, ",{value:.6}");
+            }
+            for value in tick.wrench_base.iter().chain(&tick.wrench_cf).chain(&tick.desired_cf) {
+                let _ = write!(out, ",{value:.4}");
+            }
+            for value in &tick.frame_z {
+                let _ = write!(out, ",{value:.5}");
+            }
+            for bit in 0..6 {
+                let _ = write!(out, ",{}", if tick.selection & (1 << bit) != 0 { "P" } else { "F" });
+            }
+            for value in &tick.torques {
+                let _ = write!(out, ",{value:.4}");
+            }
+            out.push('\n');
+        }
+        out
+    }
+}

@@ -1,0 +1,24 @@
+//! The skill runtime (SPEC §8): binds a compiled skill and its learned features to a robot and a
+//! plant, and runs the state machine at 1 kHz through the hybrid controller.
+//!
+//! Each tick: read the plant, compute the tool pose and the applied wrench, evaluate the current
+//! state's guards in order and take at most one transition (running the entry actions of the
+//! state entered: restart its motion from the current pose, shift a goal, reset the force
+//! integral, tare the sensor), step the DMPs, build the command (pose, twist, wrench, compliant
+//! frame, selection, stiffness, gains), run the controller, apply the torques, step the plant.
+//!
+//! Learned motions describe the flange (the demonstration records the flange); the controller
+//! controls the tool point, so desired poses go through the robot's fixed flange-to-tool
+//! transform. Compliant frames keep their learned orientation; their origin is put at the tool
+//! point every tick (the contact is at the tool), except for constraints about a point or an
+//! axis (`fixed_point`, `axial_rotation`) and literal frames, whose origin means something.
+
+mod bind;
+mod log;
+mod machine;
+mod session;
+
+pub use bind::{bind, BindError, BoundSkill};
+pub use log::{RunLog, Tick};
+pub use machine::{run_replay, run_skill, ExecError, ExecOptions, Rig, RunReport, Visit};
+pub use session::{simulate, Mode, SessionError};

@@ -1,0 +1,268 @@
+//! The learned-file format written by `skillc learn`: versioned JSON tied to the IR it was learned
+//! for by a hash, holding everything the runtime needs plus quality figures.
+//!
+//! Top-level keys other tools rely on: `segments` (`{start_s, end_s}`), `frames` (name → a
+//! constant frame `{kind, origin, quaternion_wxyz}` or, per sample, the list of those), `forces`
+//! (name → `{kind, value_n}` for constants, a DMP otherwise), `quality`.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+use crate::dmp::{Dmp, QuatDmp};
+
+/// The learned-file format version; bump on every change to the serialized form.
+pub const LEARNED_VERSION: u32 = 1;
+
+/// A 64-bit FNV-1a hash of the skill's IR (its canonical JSON), in hex: a learned file is only
+/// used with the IR it was learned for.
+pub fn ir_hash(skill: &skill_ir::Skill) -> String {
+    // Spans and docs do not change what is learned or run: hash the rest.
+    let mut value = serde_json::to_value(skill).unwrap_or_default();
+    strip_positions(&mut value);
+    let text = value.to_string();
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for byte in text.bytes() {
+        hash ^= u64::from(byte);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{hash:016x}")
+}
+
+fn strip_positions(value: &mut serde_json::Value) {
+    match value {
+        serde_json::Value::Object(map) => {
+            map.remove("span");
+            map.remove("doc");
+            map.values_mut().for_each(strip_positions);
+        }
+        serde_json::Value::Array(items) => items.iter_mut().for_each(strip_positions),
+        _ => {}
+    }
+}
+
+/// Everything learned from one demonstration for one skill.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Learned {
+    /// Always [`LEARNED_VERSION`] when written by this version.
+    pub learned_version: u32,
+    /// The skill's name.
+    pub skill: String,
+    /// [`ir_hash`] of the skill it was learned for.
+    pub ir_hash: String,
+    /// Where the demonstration came from.
+    pub demo: DemoInfo,
+    /// The segments, in time order.
+    pub segments: Vec<LearnedSegment>,
+    /// Compliant frames by name.
+    pub frames: BTreeMap<String, LearnedFrame>,
+    /// Motions by name.
+    pub motions: BTreeMap<String, LearnedMotion>,
+    /// Desired forces by name.
+    pub forces: BTreeMap<String, LearnedForce>,
+    /// Thresholds by name [N or N m].
+    pub thresholds: BTreeMap<String, LearnedThreshold>,
+    /// How well the features reproduce the demonstration.
+    pub quality: Quality,
+}
+
+/// The demonstration a file was learned from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DemoInfo {
+    /// The file, as given.
+    pub source: String,
+    /// Number of samples used (after preprocessing).
+    pub samples: usize,
+    /// Duration [s].
+    pub duration_s: f64,
+    /// Mean sampling rate [Hz].
+    pub rate_hz: f64,
+    /// Warnings raised while reading it.
+    pub warnings: Vec<String>,
+}
+
+/// One segment of the demonstration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LearnedSegment {
+    /// Start time [s], demonstration clock.
+    pub start_s: f64,
+    /// End time [s] (time of the last sample).
+    pub end_s: f64,
+    /// First sample index.
+    pub start_index: usize,
+    /// One past the last sample index.
+    pub end_index: usize,
+}
+
+/// A frame pose in the base frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FramePose {
+    /// How it was obtained: a constraint model (`planar`, `concentric_cylinder`, ...),
+    /// `force_aligned`, or `fixed`.
+    pub kind: String,
+    /// Origin [m].
+    pub origin: [f64; 3],
+    /// Orientation `[w, x, y, z]`.
+    pub quaternion_wxyz: [f64; 4],
+    /// Time from the start of the frame's segment [s], for per-sample frames.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_s: Option<f64>,
+}
+
+impl FramePose {
+    /// The pose as an isometry.
+    pub fn isometry(&self) -> Isometry3<f64> {
+        let [w, x, y, z] = self.quaternion_wxyz;
+        let rotation = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z));
+        Isometry3::from_parts(Translation3::from(Vector3::from(self.origin)), rotation)
+    }
+
+    /// A frame pose from an isometry.
+    pub fn from_isometry(kind: &str, pose: &Isometry3<f64>, t_s: Option<f64>) -> Self {
+        let q = pose.rotation.quaternion();
+        FramePose {
+            kind: kind.to_string(),
+            origin: pose.translation.vector.into(),
+            quaternion_wxyz: [q.w, q.i, q.j, q.k],
+            t_s,
+        }
+    }
+}
+
+/// A learned frame: one pose, or one per sample of a segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum LearnedFrame {
+    /// A constant frame.
+    Constant(FramePose),
+    /// A frame per sample (decimated), with `t_s` from the segment's start.
+    Samples(Vec<FramePose>),
+}
+
+impl LearnedFrame {
+    /// The frame at `t_s` from the start of its segment (constant frames ignore it); between
+    /// samples the nearest earlier one is held.
+    pub fn at(&self, t_s: f64) -> Isometry3<f64> {
+        match self {
+            LearnedFrame::Constant(pose) => pose.isometry(),
+            LearnedFrame::Samples(poses) => {
+                let index = poses.partition_point(|p| p.t_s.unwrap_or(0.0) <= t_s).saturating_sub(1);
+                poses.get(index).map_or(Isometry3::identity(), FramePose::isometry)
+            }
+        }
+    }
+
+    /// The kind of the (first) pose.
+    pub fn kind(&self) -> &str {
+        match self {
+            LearnedFrame::Constant(pose) => &pose.kind,
+            LearnedFrame::Samples(poses) => poses.first().map_or("", |p| p.kind.as_str()),
+        }
+    }
+}
+
+/// A learned motion: position and orientation DMPs of the flange over one segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LearnedMotion {
+    /// The segment (0-based).
+    pub segment: usize,
+    /// Position DMP, 3 channels [m], base frame.
+    pub position: Dmp,
+    /// Orientation DMP, base frame.
+    pub orientation: QuatDmp,
+}
+
+/// A learned desired force. Scalar forces act along the z axis of the state's control frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum LearnedForce {
+    /// Constant from the lowest-variance in-contact region.
+    Constant {
+        /// The force [N].
+        value_n: f64,
+        /// Its standard deviation over the region [N].
+        std_n: f64,
+        /// The region [s, s] in demonstration time.
+        region_s: [f64; 2],
+    },
+    /// The force at a point.
+    At {
+        /// The force [N].
+        value_n: f64,
+    },
+    /// A literal.
+    Literal {
+        /// The force [N].
+        value_n: f64,
+    },
+    /// No desired force (pure compliance on force axes).
+    Tracked {
+        /// Always 0.
+        value_n: f64,
+    },
+    /// DMPs of the applied force vector [N], base frame.
+    Dmp {
+        /// 3 channels.
+        dmp: Dmp,
+    },
+    /// A DMP of the force magnitude along a frame axis [N].
+    Magnitude {
+        /// 1 channel.
+        dmp: Dmp,
+    },
+}
+
+impl LearnedForce {
+    /// The constant value, for forces that have one.
+    pub fn value_n(&self) -> Option<f64> {
+        match self {
+            LearnedForce::Constant { value_n, .. }
+            | LearnedForce::At { value_n }
+            | LearnedForce::Literal { value_n }
+            | LearnedForce::Tracked { value_n } => Some(*value_n),
+            LearnedForce::Dmp { .. } | LearnedForce::Magnitude { .. } => None,
+        }
+    }
+}
+
+/// A learned threshold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LearnedThreshold {
+    /// The value [N or N m].
+    pub value: f64,
+}
+
+/// Reconstruction and fit figures.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Quality {
+    /// Per motion: RMS error of the DMP rollout against the demonstration.
+    pub motions: BTreeMap<String, MotionQuality>,
+    /// Per DMP force: RMS error of the rollout [N].
+    pub forces_rms_n: BTreeMap<String, f64>,
+    /// Per fitted frame: the constraint fits (every candidate, the chosen one marked).
+    pub constraints: BTreeMap<String, Vec<ConstraintQuality>>,
+}
+
+/// How well a motion reproduces its segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MotionQuality {
+    /// RMS position error per axis x, y, z [m].
+    pub position_rms_m: [f64; 3],
+    /// RMS orientation error [rad].
+    pub orientation_rms_rad: f64,
+}
+
+/// One constraint model's fit on a segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConstraintQuality {
+    /// The model.
+    pub kind: String,
+    /// RMS position residual [m].
+    pub residual_m: f64,
+    /// RMS orientation residual [rad].
+    pub residual_rad: f64,
+    /// Agreement of the forces with the constrained directions, 0..1.
+    pub force_agreement: f64,
+    /// Whether it was chosen.
+    pub chosen: bool,
+}

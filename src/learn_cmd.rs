@@ -1,0 +1,230 @@
+//! `skillc learn SKILL DEMO.csv -o OUT.learned.json` and `skillc rollout`: learning a template's
+//! features from one demonstration, and previewing what was learned.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use skill_runtime::demo::{read_csv, ReadOptions};
+use skill_runtime::skill::{learn_skill, Learned, LearnedForce, LearnedFrame, LearnOptions};
+
+use crate::{atomic, frontend, render};
+
+/// Arguments of `skillc learn`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LearnArgs {
+    /// The `.skill` file.
+    pub skill_file: PathBuf,
+    /// The demonstration CSV (columns t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz).
+    pub demo: PathBuf,
+    /// Where to write the learned features (JSON, written atomically).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The skill to learn, when the file defines several.
+    #[arg(long)]
+    pub skill: Option<String>,
+    /// Low-pass cut-off [Hz], overriding the template's `lowpass`.
+    #[arg(long, value_name = "HZ")]
+    pub lowpass: Option<f64>,
+    /// Resampling rate [Hz], overriding the template's `resample`.
+    #[arg(long, value_name = "HZ")]
+    pub resample: Option<f64>,
+}
+
+/// Why a command failed: a problem with the input (exit 1) or with usage or IO (exit 2).
+#[derive(Debug)]
+pub enum Failure {
+    /// Exit 1.
+    Input(String),
+    /// Exit 2.
+    Usage(String),
+}
+
+impl Failure {
+    /// Prints the message and returns the exit code.
+    pub fn report(self) -> u8 {
+        match self {
+            Failure::Input(message) => {
+                eprintln!("error: {message}");
+                1
+            }
+            Failure::Usage(message) => {
+                eprintln!("error: {message}");
+                2
+            }
+        }
+    }
+}
+
+/// Compiles a `.skill` file and picks one skill of it (`name`, or the only one).
+pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program, skill_ir::Skill), Failure> {
+    let compilation = frontend::compile_path(path).map_err(|err| Failure::Usage(err.to_string()))?;
+    let Some(program) = compilation.program.clone() else {
+        let mut text = String::new();
+        for diag in &compilation.diags {
+            text.push_str(&render::plain(diag, &compilation));
+        }
+        return Err(Failure::Input(format!("`{}` does not compile:\n{}", path.display(), text.trim_end())));
+    };
+    let skill = match name {
+        Some(name) => program.skill(name).cloned().ok_or_else(|| {
+            let names: Vec<&str> = program.skills.iter().map(|s| s.name.as_str()).collect();
+            Failure::Usage(format!("`{}` has no skill `{name}`; it has {}", path.display(), names.join(", ")))
+        })?,
+        None => match program.skills.as_slice() {
+            [only] => only.clone(),
+            [] => return Err(Failure::Usage(format!("`{}` defines no skill", path.display()))),
+            many => {
+                let names: Vec<&str> = many.iter().map(|s| s.name.as_str()).collect();
+                return Err(Failure::Usage(format!(
+                    "`{}` defines {} skills ({}); pick one with --skill",
+                    path.display(),
+                    many.len(),
+                    names.join(", ")
+                )));
+            }
+        },
+    };
+    Ok((program, skill))
+}
+
+/// Learns a skill from a demonstration file; the library form of `skillc learn`.
+pub fn learn_from_files(
+    skill: &skill_ir::Skill,
+    demo_path: &Path,
+    options: &LearnOptions,
+) -> Result<Learned, Failure> {
+    let min_samples = (skill.learn.segments as usize * 5).max(10);
+    let loaded = read_csv(demo_path, &ReadOptions { min_samples }).map_err(|err| Failure::Input(error_chain(&err)))?;
+    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| Failure::Input(error_chain(&err)))
+}
+
+/// An error and its sources on one line: `a: b: c`.
+pub fn error_chain(err: &dyn std::error::Error) -> String {
+    let mut text = err.to_string();
+    let mut source = err.source();
+    while let Some(inner) = source {
+        let _ = write!(text, ": {inner}");
+        source = inner.source();
+    }
+    text
+}
+
+/// Runs `skillc learn`.
+pub fn run(args: &LearnArgs) -> u8 {
+    match learn(args) {
+        Ok(summary) => {
+            print!("{summary}");
+            0
+        }
+        Err(failure) => failure.report(),
+    }
+}
+
+fn learn(args: &LearnArgs) -> Result<String, Failure> {
+    let (_, skill) = load_skill(&args.skill_file, args.skill.as_deref())?;
+    let options = LearnOptions { lowpass_hz: args.lowpass, resample_hz: args.resample };
+    let learned = learn_from_files(&skill, &args.demo, &options)?;
+    let json = serde_json::to_string_pretty(&learned).map_err(|err| Failure::Usage(err.to_string()))? + "\n";
+    atomic::write(&args.output, json.as_bytes())
+        .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", args.output.display())))?;
+    let mut out = summary(&learned);
+    let _ = writeln!(out, "wrote `{}`", args.output.display());
+    Ok(out)
+}
+
+/// A short human summary of what was learned.
+pub fn summary(learned: &Learned) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "learned `{}` from `{}` ({} samples, {:.2} s, {:.0} Hz)",
+        learned.skill, learned.demo.source, learned.demo.samples, learned.demo.duration_s, learned.demo.rate_hz
+    );
+    for warning in &learned.demo.warnings {
+        let _ = writeln!(out, "  warning: {warning}");
+    }
+    let _ = writeln!(out, "segments:");
+    for (index, segment) in learned.segments.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "  {}  {:7.3} s .. {:7.3} s  ({} samples)",
+            index + 1,
+            segment.start_s,
+            segment.end_s,
+            segment.end_index - segment.start_index
+        );
+    }
+    if !learned.frames.is_empty() {
+        let _ = writeln!(out, "frames:");
+    }
+    for (name, frame) in &learned.frames {
+        let pose = frame.at(0.0);
+        let z = pose.rotation * nalgebra::Vector3::z();
+        let detail = match frame {
+            LearnedFrame::Constant(_) => String::new(),
+            LearnedFrame::Samples(poses) => format!(", {} samples", poses.len()),
+        };
+        let residual = learned
+            .quality
+            .constraints
+            .get(name)
+            .and_then(|fits| fits.iter().find(|f| f.chosen))
+            .map(|fit| format!(", residual {:.2} mm / {:.2}°", fit.residual_m * 1e3, fit.residual_rad.to_degrees()))
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "  {name:<10} {:<16} z = [{:+.3}, {:+.3}, {:+.3}]{residual}{detail}",
+            frame.kind(),
+            z.x,
+            z.y,
+            z.z
+        );
+    }
+    if !learned.motions.is_empty() {
+        let _ = writeln!(out, "motions (reconstruction RMS):");
+    }
+    for (name, motion) in &learned.motions {
+        let quality = learned.quality.motions.get(name);
+        let (position, rotation) = quality.map_or((f64::NAN, f64::NAN), |q| {
+            let [x, y, z] = q.position_rms_m;
+            (((x * x + y * y + z * z) / 3.0).sqrt(), q.orientation_rms_rad)
+        });
+        let _ = writeln!(
+            out,
+            "  {name:<10} segment {}  {:.2} s  {:.3} mm, {:.3}°",
+            motion.segment + 1,
+            motion.position.tau_s,
+            position * 1e3,
+            rotation.to_degrees()
+        );
+    }
+    if !learned.forces.is_empty() {
+        let _ = writeln!(out, "forces:");
+    }
+    for (name, force) in &learned.forces {
+        let text = match force {
+            LearnedForce::Constant { value_n, std_n, region_s } => {
+                format!("constant {value_n:.2} N (σ {std_n:.2} N over {:.2}..{:.2} s)", region_s[0], region_s[1])
+            }
+            LearnedForce::At { value_n } => format!("at a point {value_n:.2} N"),
+            LearnedForce::Literal { value_n } => format!("literal {value_n:.2} N"),
+            LearnedForce::Tracked { .. } => "tracked".to_string(),
+            LearnedForce::Dmp { dmp } => format!(
+                "DMP of the force vector, {:.2} s, RMS {:.3} N",
+                dmp.tau_s,
+                learned.quality.forces_rms_n.get(name).copied().unwrap_or(f64::NAN)
+            ),
+            LearnedForce::Magnitude { dmp } => format!(
+                "DMP of the normal force, {:.2} s, RMS {:.3} N",
+                dmp.tau_s,
+                learned.quality.forces_rms_n.get(name).copied().unwrap_or(f64::NAN)
+            ),
+        };
+        let _ = writeln!(out, "  {name:<10} {text}");
+    }
+    for (name, threshold) in &learned.thresholds {
+        let _ = writeln!(out, "threshold {name} = {:.2}", threshold.value);
+    }
+    out
+}

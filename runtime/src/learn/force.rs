@@ -52,6 +52,9 @@ pub struct ConstantForceConfig {
     pub min_region_s: f64,
     /// Mean region length for the change-point prior [s].
     pub mean_region_s: f64,
+    /// Particles kept by the change-point detection (fewer is faster; a 1-D step profile
+    /// needs few).
+    pub max_particles: usize,
 }
 
 impl Default for ConstantForceConfig {
@@ -60,6 +63,7 @@ impl Default for ConstantForceConfig {
             contact_threshold_n: 1.0,
             min_region_s: 0.2,
             mean_region_s: 1.0,
+            max_particles: 30,
         }
     }
 }
@@ -140,6 +144,7 @@ pub fn constant_normal_force(
             mean_s: config.mean_region_s,
         },
         noise_floor: 1e-3,
+        max_particles: config.max_particles,
         ..ChangepointConfig::default()
     };
     let pieces = changepoint(&features, t_s, &cp_config)?;

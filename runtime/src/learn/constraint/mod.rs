@@ -26,6 +26,10 @@
 //! | fixed point | the fixed point | along the mean applied force (else base z) | minimal rotation from base x |
 //!
 //! y completes a right-handed frame (`y = z × x`).
+//!
+//! A slide along a straight line does not determine its plane: when the points lie within
+//! `5 × position_tolerance_m` of a line, the plane normal is taken as the mean applied force
+//! made perpendicular to the line.
 
 mod frame;
 mod models;

@@ -84,7 +84,7 @@ fn solve_point(shared: &Shared<'_>, projector: &Matrix3<f64>) -> (Vector3<f64>, 
 
 /// Point-on-plane: a tool point `o` with `n·(R_k o + p_k) = d`, by alternating the plane fit
 /// (principal components of the moved points) and the linear solve for `(o, d)`.
-fn point_on_plane(shared: &Shared<'_>) -> (Vector3<f64>, Vector3<f64>, f64, Vector3<f64>) {
+fn point_on_plane(shared: &Shared<'_>, line_tolerance_m: f64) -> (Vector3<f64>, Vector3<f64>, f64, Vector3<f64>) {
     let mut o = Vector3::zeros();
     let mut normal = shared.pos_eig.1[2];
     for _ in 0..10 {
@@ -98,8 +98,9 @@ fn point_on_plane(shared: &Shared<'_>) -> (Vector3<f64>, Vector3<f64>, f64, Vect
         let cov = points
             .iter()
             .map(|p| (p - centroid) * (p - centroid).transpose())
-            .sum::<Matrix3<f64>>();
-        normal = eigen_sorted(cov).1[2];
+            .sum::<Matrix3<f64>>()
+            / points.len() as f64;
+        normal = plane_normal(&eigen_sorted(cov), shared.applied, line_tolerance_m);
         let mut ata = nalgebra::Matrix4::zeros();
         let mut atb = Vector4::zeros();
         for (r, p) in shared.rotation.iter().zip(shared.position) {
@@ -130,6 +131,27 @@ fn point_on_plane(shared: &Shared<'_>) -> (Vector3<f64>, Vector3<f64>, f64, Vect
     let residual = rms(points.iter().map(|p| normal.dot(&(p - centroid))));
     let main = eigen_sorted(points.iter().map(|p| (p - centroid) * (p - centroid).transpose()).sum()).1[0];
     (normal, centroid, residual, main)
+}
+
+/// The plane normal from the principal directions `(values, vectors)` of a point cloud. When the
+/// points lie along a line (`√λ₂ < line_tolerance_m`) geometry leaves the normal free to turn
+/// about the line; then the normal is the mean applied force made perpendicular to the line,
+/// if there is contact.
+fn plane_normal(
+    eig: &([f64; 3], [Vector3<f64>; 3]),
+    applied: Option<Vector3<f64>>,
+    line_tolerance_m: f64,
+) -> Vector3<f64> {
+    let ([_, l2, _], [e1, _, e3]) = *eig;
+    if l2.sqrt() < line_tolerance_m {
+        if let Some(f) = applied {
+            let perpendicular = f - e1 * e1.dot(&f);
+            if perpendicular.norm() > 1e-9 {
+                return perpendicular.normalize();
+            }
+        }
+    }
+    e3
 }
 
 /// `1 − mean(|F_free| / |F|)` over samples in contact (1 when nothing is in contact or free).
@@ -307,24 +329,30 @@ fn fit_one(
     force_n: &[Vector3<f64>],
     config: &ConstraintConfig,
 ) -> ConstraintFit {
-    let ([_, l2, l3], [e1, e2, e3]) = shared.pos_eig;
+    let ([_, l2, l3], [e1, e2, _]) = shared.pos_eig;
+    // Motion closer to a line than this leaves a plane's normal to the force direction.
+    let line_tolerance = 5.0 * config.position_tolerance_m;
     let applied_dir = shared.applied.filter(|f| f.norm() > 1e-12).map(|f| f.normalize());
     let (residual_m, residual_rad, free, axis, point, frame) = match kind {
         ConstraintKind::Planar => {
-            let normal = into_surface(e3, shared.applied);
+            let normal = into_surface(
+                plane_normal(&shared.pos_eig, shared.applied, line_tolerance),
+                shared.applied,
+            );
+            let across = normal.cross(&e1).normalize();
             let x = along_travel(e1, &shared.travel);
             let frame = frame_from(shared.centroid, normal, x);
             (
-                l3.sqrt(),
+                rms(shared.position.iter().map(|p| normal.dot(&(p - shared.centroid)))),
                 off_axis_rms(&shared.rotvec, &normal),
-                vec![e1, e2],
+                vec![e1, across],
                 Some(normal),
                 shared.centroid,
                 frame,
             )
         }
         ConstraintKind::PointOnPlane => {
-            let (normal, centroid, residual, main) = point_on_plane(shared);
+            let (normal, centroid, residual, main) = point_on_plane(shared, line_tolerance);
             let normal = into_surface(normal, shared.applied);
             let frame = frame_from(centroid, normal, along_travel(main, &shared.travel));
             let in_plane = [perpendicular(&normal), normal.cross(&perpendicular(&normal))];

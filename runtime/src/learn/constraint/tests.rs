@@ -80,6 +80,38 @@ fn tilted_planes_choose_planar_with_normal_within_1_degree() {
 }
 
 #[test]
+fn straight_slide_takes_its_plane_normal_from_the_force() {
+    let mut rng = Rng::new(12);
+    let n_out = unit(Vector3::new(0.25, 0.3, 1.0));
+    let along = unit(n_out.cross(&Vector3::y()));
+    let base_q = UnitQuaternion::from_euler_angles(3.0, -0.1, 0.5);
+    let mut seg = Segment {
+        position: vec![],
+        orientation: vec![],
+        force: vec![],
+    };
+    for k in 0..N {
+        let s = k as f64 / (N - 1) as f64;
+        let q = UnitQuaternion::from_scaled_axis(n_out * (0.5 * s)) * base_q;
+        let (p, q) = noisy(&mut rng, Vector3::new(0.4, 0.0, 0.1) + along * (0.2 * s), q);
+        seg.position.push(p);
+        seg.orientation.push(q);
+        seg.force.push(n_out * 12.0 - along * 3.0 + rng.vector(0.3));
+    }
+    let report = fit_constraints(
+        &seg.position,
+        &seg.orientation,
+        &seg.force,
+        &ConstraintConfig::default(),
+    )
+    .expect("valid");
+    let best = report.chosen();
+    assert_eq!(best.kind, ConstraintKind::Planar, "{:#?}", report.fits);
+    let error = angle_deg(&best.frame.z_axis(), &(-n_out));
+    assert!(error < 1.0, "normal off by {error} deg");
+}
+
+#[test]
 fn line_chooses_prismatic_with_axis_within_2_degrees() {
     let mut rng = Rng::new(5);
     let axis = unit(Vector3::new(0.4, 0.8, -0.3));

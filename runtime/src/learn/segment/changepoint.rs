@@ -142,13 +142,16 @@ impl Prefix {
         Self { dims, time, values }
     }
 
-    /// Log evidence (max log-likelihood − BIC penalty) of `y[start..end]` under `model`.
-    fn evidence(&self, start: usize, end: usize, model: SegmentModel, floor_var: f64) -> f64 {
+    /// Log evidence (max log-likelihood − BIC penalty) of `y[start..end]` under `model`;
+    /// `log_len[m]` is `ln m`.
+    fn evidence(&self, start: usize, end: usize, model: SegmentModel, floor_var: f64, log_len: &[f64]) -> f64 {
         let [t_end, t_start] = [self.time[end], self.time[start]];
         let n = t_end[0] - t_start[0];
         let st = t_end[1] - t_start[1];
         let stt_c = (t_end[2] - t_start[2]) - st * st / n;
-        let mut total = 0.0;
+        // Σ ln σ² over columns as the log of a product (one logarithm per segment).
+        let mut var_product = 1.0;
+        let mut log_sum = 0.0;
         for col in 0..self.dims {
             let (e, s) = (self.values[end * self.dims + col], self.values[start * self.dims + col]);
             let (sy, syy, sty) = (e[0] - s[0], e[1] - s[1], e[2] - s[2]);
@@ -157,10 +160,16 @@ impl Prefix {
                 let sty_c = sty - st * sy / n;
                 sse -= sty_c * sty_c / stt_c;
             }
-            let var = (sse / n).max(floor_var);
-            total += -0.5 * n * ((2.0 * std::f64::consts::PI * var).ln() + 1.0);
+            var_product *= (sse / n).max(floor_var);
+            if !(1e-150..=1e150).contains(&var_product) {
+                log_sum += var_product.ln();
+                var_product = 1.0;
+            }
         }
-        total - 0.5 * model.n_params() * self.dims as f64 * n.ln()
+        log_sum += var_product.ln();
+        let dims = self.dims as f64;
+        let log_n = log_len[end - start];
+        -0.5 * n * (dims * ((2.0 * std::f64::consts::PI).ln() + 1.0) + log_sum) - 0.5 * model.n_params() * dims * log_n
     }
 }
 
@@ -248,11 +257,12 @@ pub fn changepoint(
     // Normalised time keeps the prefix sums well conditioned.
     let t_norm: Vec<f64> = t_s.iter().map(|t| (t - t_s[0]) / duration.max(1e-300)).collect();
     let prefix = Prefix::new(&features.data, dims, &t_norm);
+    let log_len: Vec<f64> = (0..=n).map(|m| (m.max(1) as f64).ln()).collect();
     let best_model = |start: usize, end: usize| {
         config
             .models
             .iter()
-            .map(|&model| (prefix.evidence(start, end, model, floor_var), model))
+            .map(|&model| (prefix.evidence(start, end, model, floor_var, &log_len), model))
             .fold((f64::NEG_INFINITY, SegmentModel::Constant), |best, cur| {
                 if cur.0 > best.0 {
                     cur

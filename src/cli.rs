@@ -86,6 +86,12 @@ pub enum Command {
   skillc learn stdlib-skills/press.skill examples/demos/press.csv -o press.learned.json
   skillc learn my.skill demo.csv -o my.learned.json --skill wipe --lowpass 20")]
     Learn(crate::learn_cmd::LearnArgs),
+    /// Reproduce a skill in simulation, in the demonstrated scene or a changed one.
+    #[command(after_help = "Examples:
+  skillc run stdlib-skills/slide.skill --demo examples/demos/slide.csv --scene examples/scenes/table.toml --set table.z=0.195
+  skillc run stdlib-skills/press.skill --learned press.learned.json --scene examples/scenes/button.toml -o press.log.csv
+  skillc run stdlib-skills/slide.skill --learned slide.learned.json --scene examples/scenes/table.toml --replay")]
+    Run(crate::run_cmd::RunArgs),
     /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.
     #[command(after_help = "Examples:
   skillc robot examples/robots/lwr4.urdf
@@ -150,6 +156,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Dump { stage, file } => dump(&file, stage),
         Command::Demos { out, check } => demos(&out, check),
         Command::Learn(args) => crate::learn_cmd::run(&args),
+        Command::Run(args) => crate::run_cmd::run(&args),
         Command::Robot(args) => match crate::robot_cmd::run(&args) {
             Ok(()) => 0,
             Err(err) => usage_error(err),

@@ -8,5 +8,6 @@ pub mod frontend;
 pub mod learn_cmd;
 pub mod render;
 pub mod robot_cmd;
+pub mod run_cmd;
 
 pub use cli::{run, Cli};

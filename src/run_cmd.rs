@@ -1,0 +1,179 @@
+//! `skillc run`: reproduce a skill (or a task) in simulation and summarise what happened.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog, RunReport};
+use skill_runtime::sim::Scene;
+use skill_runtime::skill::{Learned, LearnOptions};
+
+use crate::atomic;
+use crate::learn_cmd::{error_chain, learn_from_files, load_skill, Failure};
+
+/// Arguments of `skillc run`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunArgs {
+    /// The `.skill` file with the skill (or task) to run.
+    pub file: PathBuf,
+    /// The skill to run, when the file defines several.
+    #[arg(long)]
+    pub skill: Option<String>,
+    /// The learned file (from `skillc learn`).
+    #[arg(long, conflicts_with = "demo")]
+    pub learned: Option<PathBuf>,
+    /// Learn from this demonstration first instead of reading a learned file.
+    #[arg(long)]
+    pub demo: Option<PathBuf>,
+    /// The scene (TOML).
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Change a scene value, e.g. `--set table.z=0.195` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Write every control tick to this CSV file.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Run the baseline instead: the learned motions replayed under pure impedance control.
+    #[arg(long)]
+    pub replay: bool,
+    /// Multiply every desired force and force threshold.
+    #[arg(long, default_value_t = 1.0)]
+    pub force_scale: f64,
+    /// Multiply the motion speed.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+}
+
+/// Loads a scene and applies `KEY=VALUE` overrides.
+pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
+    let mut scene = Scene::from_file(path).map_err(|err| Failure::Input(error_chain(&err)))?;
+    for set in sets {
+        let Some((key, value)) = set.split_once('=') else {
+            return Err(Failure::Usage(format!("`--set {set}` must look like KEY=VALUE, e.g. table.z=0.195")));
+        };
+        scene.set(key.trim(), value.trim()).map_err(|err| Failure::Input(error_chain(&err)))?;
+    }
+    Ok(scene)
+}
+
+/// Reads a learned file.
+pub fn read_learned(path: &Path) -> Result<Learned, Failure> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
+    serde_json::from_str(&text).map_err(|err| {
+        Failure::Input(format!("`{}` is not a learned file: {err} (line {}, column {})", path.display(), err.line(), err.column()))
+    })
+}
+
+/// Runs `skillc run`.
+pub fn run(args: &RunArgs) -> u8 {
+    match run_inner(args) {
+        Ok((report, text)) => {
+            print!("{text}");
+            match report.outcome {
+                skill_ir::Outcome::Success => 0,
+                skill_ir::Outcome::Failure => 1,
+            }
+        }
+        Err(failure) => failure.report(),
+    }
+}
+
+fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
+    if !(args.force_scale > 0.0 && args.speed > 0.0) {
+        return Err(Failure::Usage("--force-scale and --speed must be positive".to_string()));
+    }
+    let (_, skill) = load_skill(&args.file, args.skill.as_deref())?;
+    let learned = match (&args.learned, &args.demo) {
+        (Some(path), _) => read_learned(path)?,
+        (None, Some(demo)) => learn_from_files(&skill, demo, &LearnOptions::default())?,
+        (None, None) => {
+            return Err(Failure::Usage("give the learned file (--learned L.json) or a demonstration (--demo D.csv)".into()))
+        }
+    };
+    let scene = load_scene(&args.scene, &args.sets)?;
+    let options = ExecOptions {
+        overrides: skill_ir::Overrides { force_scale: args.force_scale, speed_factor: args.speed, goal_offset_m: [0.0; 3] },
+        ..ExecOptions::default()
+    };
+    let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
+    let mode = if args.replay { Mode::Replay(&learned) } else { Mode::Skill(&bound) };
+    let (report, log) = simulate(&scene, mode, &options).map_err(|err| Failure::Input(error_chain(&err)))?;
+    if let Some(path) = &args.output {
+        atomic::write(path, log.to_csv().as_bytes())
+            .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
+    }
+    let mut text = summary(&skill.name, args.replay, &report, &log);
+    if let Some(path) = &args.output {
+        let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), log.ticks.len());
+    }
+    Ok((report, text))
+}
+
+/// Per-state contact statistics of a run: applied force along the compliant frame's z.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StateStats {
+    /// Ticks in the state.
+    pub ticks: usize,
+    /// Mean applied force along the compliant z [N].
+    pub mean_n: f64,
+    /// Largest applied force along the compliant z [N].
+    pub max_n: f64,
+    /// RMS of (desired − applied) along z on force-controlled ticks [N], if any.
+    pub rms_error_n: Option<f64>,
+    /// Mean desired force along z on force-controlled ticks [N], if any.
+    pub mean_desired_n: Option<f64>,
+}
+
+/// Statistics per state index of the log.
+pub fn state_stats(log: &RunLog) -> Vec<StateStats> {
+    let mut sums = vec![(0usize, 0.0, f64::NEG_INFINITY, 0usize, 0.0, 0.0); log.states.len()];
+    for tick in &log.ticks {
+        let entry = &mut sums[tick.state as usize];
+        let fz = tick.wrench_cf[2];
+        entry.0 += 1;
+        entry.1 += fz;
+        entry.2 = entry.2.max(fz);
+        if tick.selection & (1 << 2) == 0 {
+            entry.3 += 1;
+            entry.4 += (tick.desired_cf[2] - fz).powi(2);
+            entry.5 += tick.desired_cf[2];
+        }
+    }
+    sums.into_iter()
+        .map(|(ticks, sum, max, force_ticks, sq, desired)| StateStats {
+            ticks,
+            mean_n: if ticks > 0 { sum / ticks as f64 } else { 0.0 },
+            max_n: if ticks > 0 { max } else { 0.0 },
+            rms_error_n: (force_ticks > 0).then(|| (sq / force_ticks as f64).sqrt()),
+            mean_desired_n: (force_ticks > 0).then(|| desired / force_ticks as f64),
+        })
+        .collect()
+}
+
+/// The human summary of a run.
+pub fn summary(skill: &str, replay: bool, report: &RunReport, log: &RunLog) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "{} `{skill}`: {:.2} s simulated", if replay { "replay of" } else { "skill" }, report.duration_s);
+    let stats = state_stats(log);
+    let _ = writeln!(out, "  {:<18} {:>8} {:>8}   {:>8} {:>8} {:>9}", "state", "enter s", "exit s", "F̄z N", "max Fz N", "Fz err N");
+    for visit in &report.visits {
+        let index = log.states.iter().position(|s| *s == visit.state);
+        let stat = index.and_then(|i| stats.get(i)).cloned().unwrap_or_default();
+        let error = match (stat.rms_error_n, stat.mean_desired_n) {
+            (Some(rms), Some(desired)) => format!("{rms:.2} of {desired:.1}"),
+            _ => "-".to_string(),
+        };
+        let _ = writeln!(
+            out,
+            "  {:<18} {:>8.3} {:>8.3}   {:>8.2} {:>8.2} {:>9}",
+            visit.state, visit.enter_s, visit.exit_s, stat.mean_n, stat.max_n, error
+        );
+    }
+    let status = match report.outcome {
+        skill_ir::Outcome::Success => "success",
+        skill_ir::Outcome::Failure => "FAILURE",
+    };
+    let _ = writeln!(out, "{status}: {}", report.message);
+    out
+}

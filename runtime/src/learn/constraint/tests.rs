@@ -74,6 +74,10 @@ fn tilted_planes_choose_planar_with_normal_within_1_degree() {
         assert_eq!(best.kind, ConstraintKind::Planar, "seed {seed}: {:#?}", report.fits);
         // z points into the surface, i.e. along the applied force −F.
         let error = angle_deg(&best.frame.z_axis(), &(-n_out));
+        eprintln!(
+            "plane seed {seed}: normal error {error:.3} deg, residual {:.3} mm",
+            best.residual_m * 1e3
+        );
         assert!(error < 1.0, "seed {seed}: normal off by {error} deg");
         assert!(best.residual_m < 1e-3);
     }
@@ -108,6 +112,7 @@ fn straight_slide_takes_its_plane_normal_from_the_force() {
     let best = report.chosen();
     assert_eq!(best.kind, ConstraintKind::Planar, "{:#?}", report.fits);
     let error = angle_deg(&best.frame.z_axis(), &(-n_out));
+    eprintln!("straight slide: normal error {error:.3} deg");
     assert!(error < 1.0, "normal off by {error} deg");
 }
 
@@ -139,6 +144,7 @@ fn line_chooses_prismatic_with_axis_within_2_degrees() {
     let best = report.chosen();
     assert_eq!(best.kind, ConstraintKind::Prismatic, "{:#?}", report.fits);
     let found = best.axis.expect("prismatic has an axis");
+    eprintln!("line: axis error {:.3} deg", angle_deg(&found, &axis));
     assert!(
         angle_deg(&found, &axis) < 2.0,
         "axis off by {} deg",
@@ -185,6 +191,7 @@ fn cylinder_chooses_concentric_cylinder_with_axis_within_2_degrees() {
     let best = report.chosen();
     assert_eq!(best.kind, ConstraintKind::ConcentricCylinder, "{:#?}", report.fits);
     let found = best.axis.expect("cylinder has an axis");
+    eprintln!("cylinder: axis error {:.3} deg", angle_deg(&found, &axis));
     assert!(
         angle_deg(&found, &axis) < 2.0,
         "axis off by {} deg",
@@ -226,6 +233,7 @@ fn hinge_chooses_axial_rotation_with_axis_within_2_degrees() {
     let best = report.chosen();
     assert_eq!(best.kind, ConstraintKind::AxialRotation, "{:#?}", report.fits);
     let found = best.axis.expect("hinge has an axis");
+    eprintln!("hinge: axis error {:.3} deg", angle_deg(&found, &axis));
     assert!(
         angle_deg(&found, &axis) < 2.0,
         "axis off by {} deg",

@@ -470,7 +470,10 @@ impl Learner<'_> {
                 LearnedForce::Constant {
                     value_n: found.value_n,
                     std_n: found.std_n,
-                    region_s: [t[found.region.start], t[found.region.end - 1]],
+                    region_s: match (found.regions.first(), found.regions.last()) {
+                        (Some(first), Some(last)) => [t[first.start], t[last.end - 1]],
+                        _ => [t[0], t[t.len() - 1]],
+                    },
                 }
             }
             ir::ForceSource::Dmp { segment, basis } => {
@@ -605,4 +608,5 @@ mod tests {
         assert!(smoothed[10..90].iter().all(|v| v.abs() < 0.05));
     }
 }
+
 

@@ -182,7 +182,8 @@ pub enum LearnedForce {
         value_n: f64,
         /// Its standard deviation over the region [N].
         std_n: f64,
-        /// The region [s, s] in demonstration time.
+        /// From the start of the first to the end of the last low-variance region averaged
+        /// [s], demonstration time.
         region_s: [f64; 2],
     },
     /// The force at a point.

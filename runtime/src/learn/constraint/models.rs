@@ -329,7 +329,7 @@ fn fit_one(
     force_n: &[Vector3<f64>],
     config: &ConstraintConfig,
 ) -> ConstraintFit {
-    let ([_, l2, l3], [e1, e2, _]) = shared.pos_eig;
+    let ([_, l2, l3], [e1, _, _]) = shared.pos_eig;
     // Motion closer to a line than this leaves a plane's normal to the force direction.
     let line_tolerance = 5.0 * config.position_tolerance_m;
     let applied_dir = shared.applied.filter(|f| f.norm() > 1e-12).map(|f| f.normalize());

@@ -25,15 +25,15 @@ use serde::{Deserialize, Serialize};
 pub struct Demo {
     /// Name of the source (file path), used in messages.
     pub source: String,
-    /// Sample times [s], strictly increasing, not necessarily evenly spaced.
+    /// Sample times (s), strictly increasing, not necessarily evenly spaced.
     pub t_s: Vec<f64>,
-    /// Tool position in the base frame [m].
+    /// Tool position in the base frame (m).
     pub position_m: Vec<Vector3<f64>>,
     /// Tool orientation in the base frame, unit and sign-continuous (`q[k]·q[k-1] ≥ 0`).
     pub orientation: Vec<UnitQuaternion<f64>>,
-    /// Measured force in the base frame [N]: the force the environment exerts on the tool.
+    /// Measured force in the base frame (N): the force the environment exerts on the tool.
     pub force_n: Vec<Vector3<f64>>,
-    /// Measured torque in the base frame [Nm]: the torque the environment exerts on the tool.
+    /// Measured torque in the base frame (Nm): the torque the environment exerts on the tool.
     pub torque_nm: Vec<Vector3<f64>>,
 }
 
@@ -48,7 +48,7 @@ impl Demo {
         self.t_s.is_empty()
     }
 
-    /// Duration from the first to the last sample [s] (0 for fewer than two samples).
+    /// Duration from the first to the last sample (s) (0 for fewer than two samples).
     pub fn duration_s(&self) -> f64 {
         match (self.t_s.first(), self.t_s.last()) {
             (Some(first), Some(last)) => last - first,
@@ -56,7 +56,7 @@ impl Demo {
         }
     }
 
-    /// Mean sampling period [s] (0 for fewer than two samples).
+    /// Mean sampling period (s) (0 for fewer than two samples).
     pub fn mean_dt_s(&self) -> f64 {
         if self.len() < 2 {
             0.0
@@ -132,9 +132,9 @@ pub struct Loaded {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PreprocessConfig {
-    /// Resample to this fixed rate [Hz] (linear interpolation, slerp for orientation).
+    /// Resample to this fixed rate (Hz) (linear interpolation, slerp for orientation).
     pub resample_hz: Option<f64>,
-    /// Zero-phase low-pass cut-off [Hz]; needs evenly spaced samples (set `resample_hz` for
+    /// Zero-phase low-pass cut-off (Hz); needs evenly spaced samples (set `resample_hz` for
     /// irregular data, or the mean rate is used when the spacing varies by less than 1 %).
     pub lowpass_cutoff_hz: Option<f64>,
     /// Order of the low-pass (applied forwards and backwards, so the effective order doubles).
@@ -239,9 +239,9 @@ pub enum DemoError {
         file: String,
         /// 1-based line number.
         row: usize,
-        /// This row's time [s].
+        /// This row's time (s).
         t_s: f64,
-        /// Previous row's time [s].
+        /// Previous row's time (s).
         previous_s: f64,
     },
     /// A quaternion is (nearly) zero and cannot be normalised.
@@ -277,9 +277,9 @@ pub enum DemoError {
     IrregularSampling {
         /// Path of the file.
         file: String,
-        /// Smallest period [s].
+        /// Smallest period (s).
         min_dt_s: f64,
-        /// Largest period [s].
+        /// Largest period (s).
         max_dt_s: f64,
     },
 }

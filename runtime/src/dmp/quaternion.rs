@@ -30,7 +30,7 @@ pub struct QuatDmp {
     pub config: DmpConfig,
     /// The basis functions.
     pub basis: Basis,
-    /// Duration of the demonstration [s].
+    /// Duration of the demonstration (s).
     pub tau_s: f64,
     /// Demonstrated start orientation (base frame).
     pub start: UnitQuaternion<f64>,

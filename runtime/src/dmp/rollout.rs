@@ -50,7 +50,7 @@ impl DmpRollout {
         self.s
     }
 
-    /// Time since the (re)start [s].
+    /// Time since the (re)start (s).
     pub fn time_s(&self) -> f64 {
         self.t_s
     }
@@ -60,7 +60,7 @@ impl DmpRollout {
         &self.goal
     }
 
-    /// Current `τ` [s].
+    /// Current `τ` (s).
     pub fn tau_s(&self) -> f64 {
         self.tau_s
     }

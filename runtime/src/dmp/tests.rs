@@ -6,7 +6,7 @@ use super::*;
 
 const TAU: f64 = 10.0;
 
-/// A smooth 3-D path [m] that starts and ends at rest: minimum jerk plus a bump.
+/// A smooth 3-D path (m) that starts and ends at rest: minimum jerk plus a bump.
 fn path(t: f64) -> Vector3<f64> {
     let u = (t / TAU).clamp(0.0, 1.0);
     let min_jerk = 10.0 * u.powi(3) - 15.0 * u.powi(4) + 6.0 * u.powi(5);

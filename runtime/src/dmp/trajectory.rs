@@ -54,7 +54,7 @@ pub struct Dmp {
     pub config: DmpConfig,
     /// The basis functions.
     pub basis: Basis,
-    /// Duration of the demonstration [s]: the default `τ`.
+    /// Duration of the demonstration (s): the default `τ`.
     pub tau_s: f64,
     /// Demonstrated start, one value per channel (units of the channel).
     pub start: Vec<f64>,

@@ -30,11 +30,11 @@ pub enum ForceError {
     /// No in-contact region long enough.
     #[error("no contact region of at least `min_region_s` = {min_region_s} s above `contact_threshold_n` = {threshold_n} N (peak {peak_n:.3} N)")]
     NoContact {
-        /// Largest applied force [N].
+        /// Largest applied force (N).
         peak_n: f64,
-        /// Threshold [N].
+        /// Threshold (N).
         threshold_n: f64,
-        /// Shortest region [s].
+        /// Shortest region (s).
         min_region_s: f64,
     },
     /// The change-point segmentation of the force profile failed.
@@ -46,11 +46,11 @@ pub enum ForceError {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ConstantForceConfig {
-    /// A region counts as in contact when its mean applied force exceeds this [N].
+    /// A region counts as in contact when its mean applied force exceeds this (N).
     pub contact_threshold_n: f64,
-    /// Shortest region considered [s].
+    /// Shortest region considered (s).
     pub min_region_s: f64,
-    /// Mean region length for the change-point prior [s].
+    /// Mean region length for the change-point prior (s).
     pub mean_region_s: f64,
     /// Pieces whose variance is at most this multiple of the smallest piece variance are
     /// averaged together (1 = only the quietest piece).
@@ -75,9 +75,9 @@ impl Default for ConstantForceConfig {
 /// A constant force and the regions it was taken from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConstantForce {
-    /// Mean applied force over the regions [N].
+    /// Mean applied force over the regions (N).
     pub value_n: f64,
-    /// Standard deviation over the regions [N].
+    /// Standard deviation over the regions (N).
     pub std_n: f64,
     /// The quietest constant-mean piece.
     pub region: Segment,
@@ -85,7 +85,7 @@ pub struct ConstantForce {
     pub regions: Vec<Segment>,
 }
 
-/// The applied force along each frame's z axis, `−force_n[k] · z_k` [N].
+/// The applied force along each frame's z axis, `−force_n[k] · z_k` (N).
 pub fn profile_along(force_n: &[Vector3<f64>], frames: &[CompliantFrame]) -> Result<Vec<f64>, ForceError> {
     if frames.len() != force_n.len() {
         return Err(ForceError::LengthMismatch {
@@ -101,14 +101,14 @@ pub fn profile_along(force_n: &[Vector3<f64>], frames: &[CompliantFrame]) -> Res
         .collect())
 }
 
-/// The applied force along one fixed axis `z` (unit, base frame), `−force_n[k] · z` [N].
+/// The applied force along one fixed axis `z` (unit, base frame), `−force_n[k] · z` (N).
 pub fn profile_along_axis(force_n: &[Vector3<f64>], z: &Vector3<f64>) -> Vec<f64> {
     let z = z.normalize();
     force_n.iter().map(|f| -f.dot(&z)).collect()
 }
 
 /// The applied force along `z` at sample `index`, averaged over `window` samples centred on it
-/// [N]: the contact force at a touch point, used as a threshold.
+/// (N): the contact force at a touch point, used as a threshold.
 pub fn force_at(force_n: &[Vector3<f64>], z: &Vector3<f64>, index: usize, window: usize) -> Result<f64, ForceError> {
     if index >= force_n.len() {
         return Err(ForceError::LengthMismatch {

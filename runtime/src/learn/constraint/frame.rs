@@ -10,7 +10,7 @@ use super::ConstraintError;
 /// direction along which the tool pushes (see each constructor for the other axes).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CompliantFrame {
-    /// Origin in the base frame [m].
+    /// Origin in the base frame (m).
     pub origin_m: Vector3<f64>,
     /// Orientation in the base frame (columns of its matrix are the frame's x, y, z axes).
     pub orientation: UnitQuaternion<f64>,
@@ -103,7 +103,7 @@ pub fn rotation_between(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ForceFrameConfig {
-    /// Below this force magnitude [N] the direction is not trusted and the last valid frame is held.
+    /// Below this force magnitude (N) the direction is not trusted and the last valid frame is held.
     pub min_force_n: f64,
     /// Forces are averaged over this many samples (centred) before taking the direction.
     pub smoothing_samples: usize,

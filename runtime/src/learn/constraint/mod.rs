@@ -2,8 +2,8 @@
 //!
 //! Six models are fitted by least squares to the tool poses of a segment: each has free
 //! translational and rotational directions ([`ConstraintKind::dof`]). Every fit reports
-//! - `residual_m`: RMS distance of the constrained point from its constraint set [m],
-//! - `residual_rad`: RMS rotation outside the allowed rotation axes [rad],
+//! - `residual_m`: RMS distance of the constrained point from its constraint set (m),
+//! - `residual_rad`: RMS rotation outside the allowed rotation axes (rad),
 //! - `force_agreement`: `1 − mean(|F_free| / |F|)` over samples in contact, where `F_free` is
 //!   the measured force along the model's free translation directions (a constraint can only
 //!   push along its constrained directions; friction lowers the figure a little).
@@ -88,11 +88,11 @@ impl ConstraintKind {
 pub struct ConstraintConfig {
     /// Models to try.
     pub candidates: Vec<ConstraintKind>,
-    /// Largest accepted RMS position residual [m].
+    /// Largest accepted RMS position residual (m).
     pub position_tolerance_m: f64,
-    /// Largest accepted RMS rotation residual [rad].
+    /// Largest accepted RMS rotation residual (rad).
     pub rotation_tolerance_rad: f64,
-    /// Samples with a smaller force [N] do not count for force agreement or frame direction.
+    /// Samples with a smaller force (N) do not count for force agreement or frame direction.
     pub contact_threshold_n: f64,
 }
 
@@ -112,9 +112,9 @@ impl Default for ConstraintConfig {
 pub struct ConstraintFit {
     /// The model.
     pub kind: ConstraintKind,
-    /// RMS position residual [m].
+    /// RMS position residual (m).
     pub residual_m: f64,
-    /// RMS rotation residual [rad].
+    /// RMS rotation residual (rad).
     pub residual_rad: f64,
     /// Agreement of the measured force with the constrained directions, in `[0, 1]`.
     pub force_agreement: f64,
@@ -125,7 +125,7 @@ pub struct ConstraintFit {
     /// The model's main direction (unit, base frame): the plane normal (into the surface), the
     /// line or cylinder axis, the hinge axis; `None` for a fixed point.
     pub axis: Option<Vector3<f64>>,
-    /// A point of the constraint (on the plane, line or axis; the fixed point) [m], base frame.
+    /// A point of the constraint (on the plane, line or axis; the fixed point) (m), base frame.
     pub point_m: Vector3<f64>,
     /// The compliant frame (conventions in the [module docs](self)).
     pub frame: CompliantFrame,
@@ -188,9 +188,9 @@ pub enum ConstraintError {
     /// The force never reaches the threshold, so no force direction exists.
     #[error("no contact: the peak force {peak_n:.3} N stays below `min_force_n` = {threshold_n} N")]
     NoContact {
-        /// Largest force magnitude [N].
+        /// Largest force magnitude (N).
         peak_n: f64,
-        /// Threshold [N].
+        /// Threshold (N).
         threshold_n: f64,
     },
 }

@@ -50,9 +50,9 @@ impl SegmentModel {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum LengthPrior {
-    /// Geometric (constant hazard) with this mean length [s].
+    /// Geometric (constant hazard) with this mean length (s).
     Geometric {
-        /// Mean segment length [s].
+        /// Mean segment length (s).
         mean_s: f64,
     },
 }
@@ -69,7 +69,7 @@ impl Default for LengthPrior {
 pub struct ChangepointConfig {
     /// Candidate segment models (all equally likely a priori).
     pub models: Vec<SegmentModel>,
-    /// Shortest segment [s].
+    /// Shortest segment (s).
     pub min_length_s: f64,
     /// Prior on segment lengths.
     pub length_prior: LengthPrior,
@@ -143,7 +143,7 @@ impl Prefix {
     }
 
     /// Log evidence (max log-likelihood − BIC penalty) of `y[start..end]` under `model`;
-    /// `log_len[m]` is `ln m`.
+    /// `log_len(m)` is `ln m`.
     fn evidence(&self, start: usize, end: usize, model: SegmentModel, floor_var: f64, log_len: &[f64]) -> f64 {
         let [t_end, t_start] = [self.time[end], self.time[start]];
         let n = t_end[0] - t_start[0];

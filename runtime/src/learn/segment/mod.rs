@@ -43,7 +43,7 @@ impl Segment {
         self.start..self.end
     }
 
-    /// Start and end time [s]: the time of the first sample and of the last sample (so that
+    /// Start and end time (s): the time of the first sample and of the last sample (so that
     /// consecutive segments share their boundary time only when they share a sample).
     pub fn times_s(&self, t_s: &[f64]) -> Option<(f64, f64)> {
         let last = self.end.checked_sub(1)?;
@@ -145,9 +145,9 @@ pub enum SegmentError {
     /// The force never exceeds the contact threshold.
     #[error("no contact: the peak force {peak_n:.3} N stays below the threshold `{threshold_n}` N")]
     NoContact {
-        /// Largest force magnitude [N].
+        /// Largest force magnitude (N).
         peak_n: f64,
-        /// Threshold [N].
+        /// Threshold (N).
         threshold_n: f64,
     },
 }

@@ -12,7 +12,7 @@ pub struct TouchConfig {
     /// The force magnitude is averaged over this many samples (centred) before the peak is
     /// searched, so a single noisy sample cannot win.
     pub smoothing_samples: usize,
-    /// The peak must exceed this force [N], otherwise there was no contact.
+    /// The peak must exceed this force (N), otherwise there was no contact.
     pub contact_threshold_n: f64,
 }
 

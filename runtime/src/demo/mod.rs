@@ -65,8 +65,11 @@ impl Demo {
         }
     }
 
-    /// The samples `range` as a new demonstration (times kept as they are).
+    /// The samples `range` as a new demonstration (times kept as they are); the range is
+    /// clipped to the samples present.
     pub fn slice(&self, range: std::ops::Range<usize>) -> Demo {
+        let end = range.end.min(self.len());
+        let range = range.start.min(end)..end;
         Demo {
             source: self.source.clone(),
             t_s: self.t_s[range.clone()].to_vec(),

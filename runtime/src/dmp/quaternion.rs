@@ -8,6 +8,10 @@
 //! `δ(q₁, q₂)` is the rotation vector (axis times angle, base frame) that turns `q₁` into `q₂`
 //! along the shorter way, and `q(t + h) = exp(h η / (2 τ)) ∗ q(t)` integrates the orientation on
 //! the sphere. `D = 2 √K` as for the 1-D systems. The three components of `f` share the phase.
+//!
+//! Limitation: the log map takes the shorter way, so every demonstrated orientation must be
+//! less than π away from the goal (otherwise `δ(q, g)` flips sign along the way and the
+//! reproduction degrades there).
 
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};

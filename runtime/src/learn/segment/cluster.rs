@@ -197,7 +197,7 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
             // Cutting at `segments` clusters can leave fewer segments once short runs are
             // merged; cut lower in the tree until the count is met (bounded search).
             let mut result = Vec::new();
-            for clusters in segments..=(segments + 64).min(n_units) {
+            for clusters in segments..=(segments + 64).min(n_units).max(segments) {
                 result = segments_after(n_units.saturating_sub(clusters).min(merges.len()));
                 if result.len() >= segments {
                     break;

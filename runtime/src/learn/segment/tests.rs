@@ -101,6 +101,23 @@ fn distance_cut_and_short_runs() {
 }
 
 #[test]
+fn more_segments_than_blocks_still_returns_segments() {
+    let features = piecewise(&PIECES, 0.2, 13);
+    let config = ClusterConfig {
+        temporal: Temporal::TimeFeature {
+            weight: 1.0,
+            max_blocks: 2,
+        },
+        cut: Cut::Count { segments: 3 },
+        ..ClusterConfig::default()
+    };
+    let segments = cluster(&features, &config).expect("valid input");
+    assert_eq!(segments.len(), 2, "two blocks give at most two segments");
+    assert_eq!(segments[0].start, 0);
+    assert_eq!(segments[segments.len() - 1].end, 3000);
+}
+
+#[test]
 fn clustering_rejects_bad_input() {
     let features = Features {
         data: vec![0.0, f64::NAN, 1.0],

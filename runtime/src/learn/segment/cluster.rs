@@ -9,7 +9,11 @@
 //!   recomputed exactly from cluster sizes and sums; for single, complete and average linkage
 //!   the distances of connected pairs are updated with the Lance-Williams formulas, and where
 //!   only one of the two merged clusters was connected to a neighbour its distance is carried
-//!   over (as scikit-learn does). `O(n k log n)` time, `O(n k)` memory.
+//!   over (as scikit-learn does). `O(n k log n)` time, `O(n k)` memory. A consequence worth
+//!   knowing: with `k = 1` two contiguous clusters touch through one pair of samples only, so
+//!   single, average and complete linkage all reduce to "split at the largest jumps between
+//!   adjacent samples", which is fragile on noisy data; Ward (exact from the cluster means) or
+//!   a larger `k` behave better.
 //! - [`Temporal::TimeFeature`]: a scaled, standardised sample-index column is appended to the
 //!   features and clustering is unconstrained. To avoid the `O(n²)` distance matrix the samples
 //!   are first pre-aggregated into at most `max_blocks` contiguous blocks of equal length

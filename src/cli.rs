@@ -92,6 +92,13 @@ pub enum Command {
   skillc run stdlib-skills/press.skill --learned press.learned.json --scene examples/scenes/button.toml -o press.log.csv
   skillc run stdlib-skills/slide.skill --learned slide.learned.json --scene examples/scenes/table.toml --replay")]
     Run(crate::run_cmd::RunArgs),
+    /// Run the thesis's experiments: learn each skill, reproduce it in changed scenes beside the
+    /// replay baseline, and write a report with tables and plots.
+    #[command(after_help = "Examples:
+  skillc eval                                  # the standard skills, demonstrations and scenes
+  skillc eval --skill slide --out slide-report
+  skillc eval --trials my-trials.toml --threads 1")]
+    Eval(crate::eval::EvalArgs),
     /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.
     #[command(after_help = "Examples:
   skillc robot examples/robots/lwr4.urdf
@@ -157,6 +164,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Demos { out, check } => demos(&out, check),
         Command::Learn(args) => crate::learn_cmd::run(&args),
         Command::Run(args) => crate::run_cmd::run(&args),
+        Command::Eval(args) => crate::eval::run(&args),
         Command::Robot(args) => match crate::robot_cmd::run(&args) {
             Ok(()) => 0,
             Err(err) => usage_error(err),

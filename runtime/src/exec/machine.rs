@@ -685,8 +685,10 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
     }
 }
 
-/// The thesis's baseline: the learned motions replayed in segment order under pure impedance
-/// control, with no force control and no contact adaptation.
+/// The thesis's baseline: the demonstration replayed under pure impedance control, with no
+/// force control and no contact adaptation. Segments run in order: a segment with a learned
+/// motion replays it from the current pose; a segment without one (e.g. the press itself)
+/// holds the pose for the segment's duration, as the demonstration did.
 pub fn run_replay(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions, mut log: Option<&mut RunLog>) -> Result<RunReport, ExecError> {
     let start_s = rig.t_s;
     let order = motions_in_order(learned);
@@ -701,43 +703,59 @@ pub fn run_replay(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions, m
     let dt = options.dt_s;
     let speed = options.overrides.speed_factor;
     let mut velocity = [0.0; 3];
-    for (name, motion) in order {
-        let state_name = format!("replay:{name}");
+    rig.sense();
+    let mut held = rig.flange();
+    for (segment_index, segment) in learned.segments.iter().enumerate() {
+        let motion = order.iter().find(|(_, motion)| motion.segment == segment_index);
+        let state_name = match motion {
+            Some((name, _)) => format!("replay:{name}"),
+            None => format!("replay:segment {}", segment_index + 1),
+        };
         let state = log.as_mut().map_or(0, |log| log.state_index(&state_name));
-        rig.sense();
-        let flange = rig.flange();
-        let mut position = motion.position.rollout();
-        let mut orientation = motion.orientation.rollout();
-        let fail = |reason: String| ExecError::Motion { state: state_name.clone(), motion: name.clone(), reason };
-        position.restart_from(flange.translation.vector.as_slice()).map_err(|e| fail(e.to_string()))?;
-        orientation.restart_from(flange.rotation);
-        let goal = Vector3::from_column_slice(&motion.position.goal) + Vector3::from(options.overrides.goal_offset_m);
-        position.set_goal(goal.as_slice()).map_err(|e| fail(e.to_string()))?;
-        position.set_tau(motion.position.tau_s / speed).map_err(|e| fail(e.to_string()))?;
-        orientation.set_tau(motion.orientation.tau_s / speed).map_err(|e| fail(e.to_string()))?;
         let enter_s = rig.t_s - start_s;
-        let steps = ((motion.position.tau_s / speed + 0.3) / dt).round() as usize;
-        for step in 0..steps {
-            if step > 0 {
-                rig.sense();
+        match motion {
+            Some((name, motion)) => {
+                let mut position = motion.position.rollout();
+                let mut orientation = motion.orientation.rollout();
+                let fail = |reason: String| ExecError::Motion { state: state_name.clone(), motion: (*name).clone(), reason };
+                position.restart_from(held.translation.vector.as_slice()).map_err(|e| fail(e.to_string()))?;
+                orientation.restart_from(held.rotation);
+                let goal = Vector3::from_column_slice(&motion.position.goal) + Vector3::from(options.overrides.goal_offset_m);
+                position.set_goal(goal.as_slice()).map_err(|e| fail(e.to_string()))?;
+                position.set_tau(motion.position.tau_s / speed).map_err(|e| fail(e.to_string()))?;
+                orientation.set_tau(motion.orientation.tau_s / speed).map_err(|e| fail(e.to_string()))?;
+                let steps = ((motion.position.tau_s / speed) / dt).round() as usize;
+                for _ in 0..steps {
+                    position.step(&motion.position, dt);
+                    orientation.step(&motion.orientation, dt);
+                    position.velocity_into(&mut velocity);
+                    let p = Vector3::from_column_slice(position.position());
+                    held = Isometry3::from_parts(Translation3::from(p), orientation.orientation());
+                    let (pose, twist) = rig.tool_command(&held, &Vector3::from(velocity), &orientation.angular_velocity());
+                    let mut cmd = Command::hold(pose, options.replay_stiffness);
+                    cmd.twist = twist;
+                    cmd.frame = Isometry3::from_parts(rig.tool().translation, UnitQuaternion::identity());
+                    rig.act(&cmd, state, &state_name, log.as_deref_mut(), dt)?;
+                    rig.sense();
+                }
             }
-            position.step(&motion.position, dt);
-            orientation.step(&motion.orientation, dt);
-            position.velocity_into(&mut velocity);
-            let p = Vector3::from_column_slice(position.position());
-            let flange = Isometry3::from_parts(Translation3::from(p), orientation.orientation());
-            let (pose, twist) = rig.tool_command(&flange, &Vector3::from(velocity), &orientation.angular_velocity());
-            let mut cmd = Command::hold(pose, options.replay_stiffness);
-            cmd.twist = twist;
-            cmd.frame = Isometry3::from_parts(rig.tool().translation, UnitQuaternion::identity());
-            rig.act(&cmd, state, &state_name, log.as_deref_mut(), dt)?;
+            None => {
+                let steps = (((segment.end_s - segment.start_s) / speed) / dt).round() as usize;
+                let (pose, _) = rig.tool_command(&held, &Vector3::zeros(), &Vector3::zeros());
+                for _ in 0..steps {
+                    let mut cmd = Command::hold(pose, options.replay_stiffness);
+                    cmd.frame = Isometry3::from_parts(rig.tool().translation, UnitQuaternion::identity());
+                    rig.act(&cmd, state, &state_name, log.as_deref_mut(), dt)?;
+                    rig.sense();
+                }
+            }
         }
         visits.push(Visit { state: state_name, enter_s, exit_s: rig.t_s - start_s });
     }
     Ok(RunReport {
         outcome: ir::Outcome::Success,
         terminal: None,
-        message: "replayed every motion".to_string(),
+        message: "replayed every segment".to_string(),
         visits,
         duration_s: rig.t_s - start_s,
     })

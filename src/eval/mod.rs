@@ -1,0 +1,379 @@
+//! `skillc eval`: the thesis's experiments (chapter 5) as one command. Each skill is learned
+//! once from its demonstration, then reproduced in every variant of its scene, side by side with
+//! the replay baseline; trials run in parallel and the results are the same for any thread count.
+
+pub mod metrics;
+mod plot;
+mod report;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog};
+use skill_runtime::skill::{Learned, LearnOptions};
+
+use crate::learn_cmd::{error_chain, learn_from_files, load_skill, Failure};
+use crate::run_cmd::load_scene;
+use metrics::{ContactPlan, Metrics};
+
+/// The default trials, shipped as `examples/eval/default.toml`.
+pub const DEFAULT_TRIALS: &str = include_str!("../../examples/eval/default.toml");
+
+/// Where the default trials file lives, relative to the repository root.
+pub const DEFAULT_TRIALS_PATH: &str = "examples/eval/default.toml";
+
+/// Arguments of `skillc eval`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct EvalArgs {
+    /// Where to write the report (index.html, summary.json, plots/).
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+    /// A trials file for your own skills and scenes (TOML, like examples/eval/default.toml).
+    #[arg(long)]
+    pub trials: Option<PathBuf>,
+    /// Only these skills (by name; repeatable).
+    #[arg(long = "skill")]
+    pub skills: Vec<String>,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Skip the replay baseline.
+    #[arg(long)]
+    pub no_replay: bool,
+}
+
+/// A trials file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrialsFile {
+    /// One entry per skill.
+    #[serde(rename = "skill")]
+    pub skills: Vec<SkillTrials>,
+}
+
+/// The trials of one skill.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkillTrials {
+    /// The `.skill` file.
+    pub file: PathBuf,
+    /// The skill's name, when the file defines several.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The demonstration to learn from.
+    pub demo: PathBuf,
+    /// The scene.
+    pub scene: PathBuf,
+    /// Success thresholds.
+    #[serde(default)]
+    pub criteria: Criteria,
+    /// The scene variants.
+    pub variants: Vec<Variant>,
+}
+
+/// Success thresholds of a trial.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Criteria {
+    /// Largest relative RMS force error in contact.
+    pub force_rms_rel: Option<f64>,
+    /// Smallest share of the contact phase in contact.
+    pub contact_share: Option<f64>,
+    /// Largest relative error of the final contact force (touch).
+    pub stop_force_rel: Option<f64>,
+}
+
+/// A scene variant.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    /// Its name in the report.
+    pub name: String,
+    /// Scene overrides, `KEY=VALUE`.
+    #[serde(default)]
+    pub set: Vec<String>,
+}
+
+/// One trial's result (an entry of `summary.json`'s `trials`).
+#[derive(Debug, Clone, Serialize)]
+pub struct TrialResult {
+    /// The skill.
+    pub skill: String,
+    /// The variant.
+    pub variant: String,
+    /// `skill` or `replay`.
+    pub mode: String,
+    /// Whether it met every criterion (and, for the skill, ended in a success state).
+    pub success: bool,
+    /// RMS force error in contact over the learned force.
+    pub force_rms_rel: Option<f64>,
+    /// Share of the contact phase in contact.
+    pub contact_share: Option<f64>,
+    /// Peak applied force [N].
+    pub peak_force_n: f64,
+    /// Final contact force [N] (touch).
+    pub stop_force_n: Option<f64>,
+    /// The learned contact force it is judged against [N].
+    pub learned_force_n: Option<f64>,
+    /// Position error at the goal [m].
+    pub goal_error_m: f64,
+    /// Simulated duration [s].
+    pub duration_s: f64,
+    /// How the run ended, or why it could not run.
+    pub message: String,
+    /// Whether the trial could not run at all (bad input).
+    pub error: bool,
+    /// States visited with entry times, `state@t`.
+    pub states: Vec<String>,
+}
+
+/// A learned skill ready for trials, or why it is not.
+struct Prepared {
+    name: String,
+    program_skill: Result<(skill_ir::Skill, Learned, ContactPlan), String>,
+    spec: SkillTrials,
+    base_dir: PathBuf,
+}
+
+/// One trial to run.
+struct Job {
+    skill: usize,
+    variant: usize,
+    replay: bool,
+}
+
+/// What one trial produced, kept for plots.
+pub struct Outcome {
+    /// The result row.
+    pub result: TrialResult,
+    /// The tick log (empty when the trial failed to run).
+    pub log: RunLog,
+}
+
+/// Runs `skillc eval`.
+pub fn run(args: &EvalArgs) -> u8 {
+    match evaluate(args) {
+        Ok(code) => code,
+        Err(failure) => failure.report(),
+    }
+}
+
+fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
+    let (text, name, base_dir) = match &args.trials {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
+            let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            (text, path.display().to_string(), base)
+        }
+        None => (DEFAULT_TRIALS.to_string(), DEFAULT_TRIALS_PATH.to_string(), PathBuf::from("examples/eval")),
+    };
+    let trials: TrialsFile =
+        toml::from_str(&text).map_err(|err| Failure::Input(format!("`{name}`: {}", err.to_string().trim())))?;
+    Ok((trials, base_dir))
+}
+
+fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
+    let file = base_dir.join(&spec.file);
+    let demo = base_dir.join(&spec.demo);
+    let fallback_name = spec.name.clone().unwrap_or_else(|| {
+        spec.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "?".to_string())
+    });
+    let loaded = load_skill(&file, spec.name.as_deref()).and_then(|(_, skill)| {
+        let learned = learn_from_files(&skill, &demo, &LearnOptions::default())?;
+        Ok((skill, learned))
+    });
+    let (name, program_skill) = match loaded {
+        Ok((skill, learned)) => {
+            let plan = ContactPlan::of(&skill, &learned);
+            (skill.name.clone(), Ok((skill, learned, plan)))
+        }
+        Err(Failure::Input(message) | Failure::Usage(message)) => (fallback_name, Err(message)),
+    };
+    Prepared { name, program_skill, spec, base_dir: base_dir.to_path_buf() }
+}
+
+fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
+    let variant = &prepared.spec.variants[job.variant];
+    let mode_name = if job.replay { "replay" } else { "skill" };
+    let failed = |message: String| Outcome {
+        result: TrialResult {
+            skill: prepared.name.clone(),
+            variant: variant.name.clone(),
+            mode: mode_name.to_string(),
+            success: false,
+            force_rms_rel: None,
+            contact_share: None,
+            peak_force_n: 0.0,
+            stop_force_n: None,
+            learned_force_n: None,
+            goal_error_m: 0.0,
+            duration_s: 0.0,
+            message,
+            error: true,
+            states: Vec::new(),
+        },
+        log: RunLog::default(),
+    };
+    let (skill, learned, plan) = match &prepared.program_skill {
+        Ok(parts) => parts,
+        Err(message) => return failed(message.clone()),
+    };
+    let scene = match load_scene(&prepared.base_dir.join(&prepared.spec.scene), &variant.set) {
+        Ok(scene) => scene,
+        Err(Failure::Input(message) | Failure::Usage(message)) => return failed(message),
+    };
+    let bound = match bind(skill, learned) {
+        Ok(bound) => bound,
+        Err(err) => return failed(err.to_string()),
+    };
+    let mode = if job.replay { Mode::Replay(learned) } else { Mode::Skill(&bound) };
+    let (report, log) = match simulate(&scene, mode, &ExecOptions::default()) {
+        Ok(done) => done,
+        Err(err) => return failed(error_chain(&err)),
+    };
+    let frame_z = |t: f64| replay_frame_z(skill, learned, plan, t);
+    let metrics: Metrics = metrics::measure(&log, plan, job.replay, &frame_z);
+    let learned_force = plan.force.as_ref().map(|force| match force {
+        skill_runtime::skill::LearnedForce::Dmp { .. } | skill_runtime::skill::LearnedForce::Magnitude { .. } => {
+            (0..100).map(|k| metrics::desired_at(force, k as f64 * 0.05)).fold(0.0, f64::max)
+        }
+        other => other.value_n().unwrap_or(0.0),
+    });
+    let criteria = prepared.spec.criteria;
+    let mut success = job.replay || report.outcome == skill_ir::Outcome::Success;
+    if let Some(max) = criteria.force_rms_rel {
+        success &= metrics.force_rms_rel.is_some_and(|v| v <= max);
+    }
+    if let Some(min) = criteria.contact_share {
+        success &= metrics.contact_share.is_some_and(|v| v >= min);
+    }
+    if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
+        success &= metrics.stop_force_n.is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
+    }
+    Outcome {
+        result: TrialResult {
+            skill: prepared.name.clone(),
+            variant: variant.name.clone(),
+            mode: mode_name.to_string(),
+            success,
+            force_rms_rel: metrics.force_rms_rel,
+            contact_share: metrics.contact_share,
+            peak_force_n: metrics.peak_force_n,
+            stop_force_n: metrics.stop_force_n,
+            learned_force_n: learned_force,
+            goal_error_m: metrics.goal_error_m,
+            duration_s: report.duration_s,
+            message: report.message.clone(),
+            error: false,
+            states: report.visits.iter().map(|v| format!("{}@{:.2}", v.state, v.enter_s)).collect(),
+        },
+        log,
+    }
+}
+
+/// The compliant z of the contact state for replay ticks, `t` seconds into the contact phase.
+fn replay_frame_z(skill: &skill_ir::Skill, learned: &Learned, plan: &ContactPlan, t: f64) -> nalgebra::Vector3<f64> {
+    match plan.frame {
+        Some(skill_ir::FrameRef::Learned(id)) => {
+            let name = &skill.learn.frames[id.index()].name;
+            learned.frames.get(name).map_or(nalgebra::Vector3::z(), |frame| frame.at(t).rotation * nalgebra::Vector3::z())
+        }
+        _ => nalgebra::Vector3::z(),
+    }
+}
+
+fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
+    let started = Instant::now();
+    let (trials, base_dir) = load_trials(args)?;
+    let selected: Vec<SkillTrials> = trials
+        .skills
+        .into_iter()
+        .filter(|spec| {
+            args.skills.is_empty() || {
+                let stem = spec.name.clone().unwrap_or_else(|| {
+                    spec.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+                });
+                args.skills.contains(&stem)
+            }
+        })
+        .collect();
+    if selected.is_empty() {
+        return Err(Failure::Usage(format!("no skill selected; the trials have {}", "none matching --skill")));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .map_err(|err| Failure::Usage(format!("cannot start worker threads: {err}")))?;
+
+    let progress = indicatif::ProgressBar::new(0);
+    progress.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    progress.set_message("learning");
+    let prepared: Vec<Prepared> = pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
+    let mut jobs = Vec::new();
+    for (skill, prep) in prepared.iter().enumerate() {
+        for variant in 0..prep.spec.variants.len() {
+            jobs.push(Job { skill, variant, replay: false });
+            if !args.no_replay {
+                jobs.push(Job { skill, variant, replay: true });
+            }
+        }
+    }
+    progress.set_length(jobs.len() as u64);
+    progress.set_message("trials");
+    let outcomes: Vec<Outcome> = pool.install(|| {
+        jobs.par_iter()
+            .map(|job| {
+                let outcome = run_job(&prepared[job.skill], job);
+                progress.inc(1);
+                outcome
+            })
+            .collect()
+    });
+    progress.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+
+    let table = report::table(&outcomes);
+    print!("{table}");
+    println!("{} trials in {elapsed:.1} s", outcomes.len());
+    let written = report::write(&args.out, &prepared_views(&prepared), &outcomes, elapsed, &table)
+        .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
+    println!("report: {}", written.display());
+    let any_error = outcomes.iter().any(|o| o.result.error);
+    Ok(u8::from(any_error))
+}
+
+/// What the report needs of each prepared skill.
+pub struct SkillView<'a> {
+    /// The skill's name.
+    pub name: &'a str,
+    /// The learned file, if learning worked.
+    pub learned: Option<&'a Learned>,
+    /// The IR.
+    pub skill: Option<&'a skill_ir::Skill>,
+    /// Why learning failed.
+    pub error: Option<&'a str>,
+    /// The demonstration path.
+    pub demo: PathBuf,
+    /// Criteria.
+    pub criteria: Criteria,
+}
+
+fn prepared_views(prepared: &[Prepared]) -> Vec<SkillView<'_>> {
+    prepared
+        .iter()
+        .map(|p| SkillView {
+            name: &p.name,
+            learned: p.program_skill.as_ref().ok().map(|(_, learned, _)| learned),
+            skill: p.program_skill.as_ref().ok().map(|(skill, _, _)| skill),
+            error: p.program_skill.as_ref().err().map(String::as_str),
+            demo: p.base_dir.join(&p.spec.demo),
+            criteria: p.spec.criteria,
+        })
+        .collect()
+}

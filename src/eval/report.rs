@@ -1,0 +1,156 @@
+//! The eval report: a terminal table, `summary.json` for machines, `index.html` with plots.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::{plot, Outcome, SkillView};
+use crate::atomic;
+
+fn percent(value: Option<f64>) -> String {
+    value.map_or("-".to_string(), |v| format!("{:.1}", v * 100.0))
+}
+
+fn number(value: Option<f64>) -> String {
+    value.map_or("-".to_string(), |v| format!("{v:.2}"))
+}
+
+/// The results as an aligned text table.
+pub(super) fn table(outcomes: &[Outcome]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8} {:>7} {:>7}",
+        "skill", "variant", "mode", "ok", "F rms %", "contact %", "peak N", "stop N", "time s"
+    );
+    for outcome in outcomes {
+        let r = &outcome.result;
+        let ok = if r.error {
+            "ERR"
+        } else if r.success {
+            "yes"
+        } else {
+            "no"
+        };
+        let _ = writeln!(
+            out,
+            "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8.1} {:>7} {:>7.2}",
+            r.skill,
+            truncate(&r.variant, 31),
+            r.mode,
+            ok,
+            percent(r.force_rms_rel),
+            percent(r.contact_share),
+            r.peak_force_n,
+            number(r.stop_force_n),
+            r.duration_s
+        );
+        if r.error {
+            let _ = writeln!(out, "         error: {}", r.message);
+        }
+    }
+    out
+}
+
+fn truncate(text: &str, width: usize) -> String {
+    if text.chars().count() <= width {
+        text.to_string()
+    } else {
+        let mut cut: String = text.chars().take(width - 1).collect();
+        cut.push('…');
+        cut
+    }
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// Writes `summary.json`, the plots and `index.html` into `out`; returns the HTML's path.
+pub(super) fn write(out: &Path, skills: &[SkillView<'_>], outcomes: &[Outcome], elapsed_s: f64, table: &str) -> std::io::Result<PathBuf> {
+    std::fs::create_dir_all(out.join("plots"))?;
+    let summary = serde_json::json!({
+        "elapsed_s": elapsed_s,
+        "threads": rayon::current_num_threads(),
+        "trials": outcomes.iter().map(|o| &o.result).collect::<Vec<_>>(),
+        "skills": skills.iter().map(|s| serde_json::json!({
+            "name": s.name,
+            "criteria": s.criteria,
+            "error": s.error,
+            "segments": s.learned.map(|l| &l.segments),
+        })).collect::<Vec<_>>(),
+    });
+    let json = serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)? + "\n";
+    atomic::write(&out.join("summary.json"), json.as_bytes())?;
+
+    let mut html = String::new();
+    html.push_str("<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>skillc eval</title>\n<style>\n");
+    html.push_str("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td.l,th.l{text-align:left}.yes{background:#dfd}.no{background:#fdd}.err{background:#fb8}img{max-width:100%;border:1px solid #eee;margin:4px 0}pre{background:#f6f6f6;padding:1em}\n");
+    html.push_str("</style></head><body>\n<h1>skillc eval</h1>\n");
+    let _ = writeln!(
+        html,
+        "<p>{} trials in {elapsed_s:.1} s on {} worker threads. Each skill is learned once from its demonstration and reproduced in every variant of its scene; <em>replay</em> is the thesis's baseline (the learned motions under pure impedance control, no force control, no contact adaptation).</p>",
+        outcomes.len(),
+        rayon::current_num_threads()
+    );
+    html.push_str("<table><tr><th class=l>skill</th><th class=l>variant</th><th class=l>mode</th><th>success</th><th>force RMS / learned %</th><th>contact %</th><th>peak N</th><th>stop N</th><th>learned N</th><th>goal error mm</th><th>time s</th><th class=l>message</th></tr>\n");
+    for outcome in outcomes {
+        let r = &outcome.result;
+        let class = if r.error {
+            "err"
+        } else if r.success {
+            "yes"
+        } else {
+            "no"
+        };
+        let _ = writeln!(
+            html,
+            "<tr class={class}><td class=l>{}</td><td class=l>{}</td><td class=l>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.1}</td><td>{}</td><td>{}</td><td>{:.1}</td><td>{:.2}</td><td class=l>{}</td></tr>",
+            escape(&r.skill),
+            escape(&r.variant),
+            r.mode,
+            if r.error { "error" } else if r.success { "yes" } else { "no" },
+            percent(r.force_rms_rel),
+            percent(r.contact_share),
+            r.peak_force_n,
+            number(r.stop_force_n),
+            number(r.learned_force_n),
+            r.goal_error_m * 1e3,
+            r.duration_s,
+            escape(&r.message)
+        );
+    }
+    html.push_str("</table>\n");
+    for skill in skills {
+        let _ = writeln!(html, "<h2>{}</h2>", escape(skill.name));
+        if let Some(error) = skill.error {
+            let _ = writeln!(html, "<p class=err>could not learn: {}</p>", escape(error));
+            continue;
+        }
+        let _ = writeln!(
+            html,
+            "<p>criteria: {}</p>",
+            escape(&serde_json::to_string(&skill.criteria).unwrap_or_default())
+        );
+        let runs: Vec<&Outcome> = outcomes.iter().filter(|o| o.result.skill == skill.name).collect();
+        for (kind, caption) in [
+            ("trajectory", "Tool path: demonstration (coloured by segment), learned rollout, every reproduction (solid: skill, dashed: replay), compliant-frame z axes as arrows."),
+            ("force", "Applied force along the compliant z during the trial (solid: skill, dashed: replay) and the learned desired force (black)."),
+            ("world_force", "Applied force in the world frame, demonstration and skill trial as demonstrated."),
+            ("timeline", "States over time, per trial."),
+        ] {
+            let file = format!("{}_{kind}.svg", skill.name);
+            match plot::draw(kind, &out.join("plots").join(&file), skill, &runs) {
+                Ok(()) => {
+                    let _ = writeln!(html, "<figure><img src=\"plots/{file}\" alt=\"{kind}\"><figcaption>{caption}</figcaption></figure>");
+                }
+                Err(err) => {
+                    let _ = writeln!(html, "<p class=err>plot {kind} failed: {}</p>", escape(&err));
+                }
+            }
+        }
+    }
+    let _ = writeln!(html, "<h2>Terminal table</h2>\n<pre>{}</pre>\n</body></html>", escape(table));
+    let index = out.join("index.html");
+    atomic::write(&index, html.as_bytes())?;
+    Ok(index)
+}

@@ -219,3 +219,92 @@ fn button_goes_down_under_the_probe_and_springs_back() {
     let depth = plant.button_depth("button").expect("button exists");
     assert!(depth < 1e-3, "depth after release: {depth}");
 }
+
+/// One step of a press: the button's depth, the tool tip's height and the noise-free and sensed force
+/// magnitudes.
+#[derive(Debug, Clone, Copy)]
+struct PressSample {
+    depth: f64,
+    tip_z: f64,
+    ideal_n: f64,
+    sensed_n: f64,
+}
+
+/// Presses `force_n` straight down for `steps` ms with τ = g(q) + Jᵀf − D q̇ and records every step.
+fn press_trace(scene: &Scene, force_n: f64, steps: usize) -> Vec<PressSample> {
+    let mut plant = RapierPlant::from_scene(scene).expect("scene builds");
+    let robot = plant.robot().clone();
+    let mut press = Press::new(&robot);
+    let mut data = robot.data();
+    let mut trace = Vec::with_capacity(steps);
+    for _ in 0..steps {
+        press.tick(&mut plant, [0.0, 0.0, -force_n], true);
+        let obs = plant.observe();
+        robot.forward_kinematics(&mut data, obs.q.as_slice());
+        trace.push(PressSample {
+            depth: plant.button_depth("button").unwrap_or(0.0),
+            tip_z: robot.tool_in_base(&data).translation.vector.z,
+            ideal_n: plant.ideal_wrench_base().fixed_rows::<3>(0).norm(),
+            sensed_n: obs.wrench_base.fixed_rows::<3>(0).norm(),
+        });
+    }
+    trace
+}
+
+/// The probe tip's radius, m (`examples/robots/lwr4.urdf`).
+const TIP_RADIUS: f64 = 0.01;
+
+#[test]
+fn button_bottoms_out_on_its_stop_and_the_sensor_reads_the_press() {
+    let scene = scene("button.toml");
+    let button = &scene.spec().objects["button"];
+    let travel = button.travel.expect("travel");
+    let stop_top = button.xyz[2] + button.height.expect("height") / 2.0 - travel;
+    for force_n in [10.0, 20.0, 40.0] {
+        let trace = press_trace(&scene, force_n, 3000);
+        // The last second: sitting still on the stop.
+        let tail = &trace[2000..];
+        let depth_err = tail.iter().map(|s| (s.depth - travel).abs()).fold(0.0, f64::max);
+        let ideal_err = tail.iter().map(|s| (s.ideal_n - force_n).abs()).fold(0.0, f64::max);
+        let sensed = tail.iter().map(|s| s.sensed_n).sum::<f64>() / tail.len() as f64;
+        let deepest = trace.iter().map(|s| s.depth).fold(0.0, f64::max);
+        let lowest = trace.iter().map(|s| s.tip_z).fold(f64::INFINITY, f64::min);
+        let below_stop = stop_top + TIP_RADIUS - lowest;
+        eprintln!(
+            "button at {force_n} N: depth {:.5} m (deepest {deepest:.5}), |f| noise-free within {ideal_err:.4} N, \
+             sensed mean {sensed:.4} N, tip below the stop by at most {below_stop:.2e} m",
+            tail[tail.len() - 1].depth
+        );
+        assert!(depth_err < 0.0005, "{force_n} N: depth off the travel by {depth_err} m");
+        assert!(deepest < travel + 0.0005, "{force_n} N: pushed {deepest} m in");
+        assert!(
+            ideal_err < 0.02 * force_n,
+            "{force_n} N: noise-free |f| off by up to {ideal_err} N"
+        );
+        assert!(
+            (sensed - force_n).abs() < 0.02 * force_n,
+            "{force_n} N: sensor reads {sensed} N"
+        );
+        assert!(below_stop < 0.0005, "{force_n} N: tip {below_stop} m below the stop");
+    }
+}
+
+#[test]
+fn pressing_hard_on_fixed_boxes_does_not_sink_the_tool() {
+    // The table (top at 0.300 m, the tip starts 1 mm above it) and button.toml's base box (top at
+    // 0.250 m) with the button moved out of the way (the tip falls 5 cm onto the box first).
+    let mut base = scene("button.toml");
+    base.set("button.z", "-5").expect("valid z");
+    for (name, scene, top) in [("table", scene("table.toml"), 0.300), ("base box", base, 0.250)] {
+        let trace = press_trace(&scene, 40.0, 5000);
+        let sink = trace
+            .iter()
+            .map(|s| top + TIP_RADIUS - s.tip_z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let tail = &trace[4000..];
+        let sensed = tail.iter().map(|s| s.sensed_n).sum::<f64>() / tail.len() as f64;
+        eprintln!("40 N on the {name}: deepest sink {sink:.2e} m, sensed mean {sensed:.4} N");
+        assert!(sink < 0.001, "{name}: the tip sank {sink} m");
+        assert!((sensed - 40.0).abs() < 0.4, "{name}: sensor reads {sensed} N");
+    }
+}

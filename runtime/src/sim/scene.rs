@@ -105,7 +105,8 @@ pub enum ObjectKind {
     Cylinder,
     /// A spring-loaded push button: a cylindrical cap (`radius`, `height`, `mass`) on a prismatic joint
     /// along its local z axis, pushed up by a spring (`stiffness`, `preload_n`, `damping`) against a
-    /// stop, pressable down by `travel`.
+    /// stop, pressable down by `travel` onto a rigid lower stop (a fixed disc under the cap top, which
+    /// the tool then rests on).
     Button,
 }
 

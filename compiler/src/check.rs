@@ -564,7 +564,7 @@ impl<'a> Checker<'a> {
                 let bound = self.bind_args(
                     "cluster",
                     args,
-                    &["linkage", "time_weight", "connectivity", "cut", "min_length"],
+                    &["linkage", "time_weight", "connectivity", "cut", "min_length", "features"],
                     0,
                 );
                 let linkage = match bound.get("linkage") {
@@ -626,10 +626,11 @@ impl<'a> Checker<'a> {
                         }
                     },
                 };
-                (ir::Segmentation::Cluster { linkage, temporal, cut, min_length_s }, implied)
+                let features = self.features(bound.get("features").copied())?;
+                (ir::Segmentation::Cluster { linkage, temporal, cut, min_length_s, features }, implied)
             }
             "changepoint" => {
-                let bound = self.bind_args("changepoint", args, &["min_length", "models", "particles"], 0);
+                let bound = self.bind_args("changepoint", args, &["min_length", "models", "particles", "features"], 0);
                 let min_length_s = match bound.get("min_length") {
                     Some(expr) => {
                         let value = self.quantity(expr, Dim::Time, "the minimum segment length");
@@ -665,7 +666,8 @@ impl<'a> Checker<'a> {
                     Some(expr) => self.count(expr, "the particle bound")?,
                     None => 100,
                 };
-                (ir::Segmentation::Changepoint { min_length_s, models, max_particles }, None)
+                let features = self.features(bound.get("features").copied())?;
+                (ir::Segmentation::Changepoint { min_length_s, models, max_particles, features }, None)
             }
             other => {
                 let diag = self
@@ -701,6 +703,32 @@ impl<'a> Checker<'a> {
             (None, None) => None,
         };
         Some(method)
+    }
+
+    /// `features: [position, force, force_magnitude]` (default position and force).
+    fn features(&mut self, expr: Option<&ast::Expr>) -> Option<ir::SegmentFeatures> {
+        let Some(expr) = expr else { return Some(ir::SegmentFeatures::default()) };
+        let ExprKind::List(items) = &expr.kind else {
+            let diag = self
+                .diag(Code::BadArgument, expr.span, "`features` must be a list", "not a list")
+                .help("write `features: [position, force_magnitude]`");
+            self.report(diag);
+            return None;
+        };
+        let mut features = ir::SegmentFeatures { position: false, force: false, force_magnitude: false };
+        for item in items {
+            match self.enum_name(item, "segmentation feature", &[("position", 0), ("force", 1), ("force_magnitude", 2)])? {
+                0 => features.position = true,
+                1 => features.force = true,
+                _ => features.force_magnitude = true,
+            }
+        }
+        if !(features.position || features.force || features.force_magnitude) {
+            let diag = self.diag(Code::BadArgument, expr.span, "`features` is empty", "nothing to segment on");
+            self.report(diag);
+            return None;
+        }
+        Some(features)
     }
 
     fn expect_count(&mut self, n: u64, span: Span) -> Option<u32> {
@@ -919,7 +947,10 @@ impl<'a> Checker<'a> {
         let names: Vec<&str> = ir::Axis::ALL.iter().map(|a| a.name()).collect();
         let diag = self
             .diag(Code::UnknownAxis, name.span, format!("unknown axis `{}`", name.name), "not an axis")
-            .help(suggest(&name.name, names.iter().copied()).unwrap_or_else(|| "axes are x y z rx ry rz".to_string()));
+            .help(match name.name.as_str() {
+                "position" | "force" => "separate control groups with a comma: `control force z, position x y rx ry rz`".to_string(),
+                _ => suggest(&name.name, names.iter().copied()).unwrap_or_else(|| "axes are x y z rx ry rz".to_string()),
+            });
         self.report(diag);
         None
     }

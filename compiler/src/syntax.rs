@@ -126,7 +126,7 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
 /// Words the grammar reserves (they may not be names); keep in step with `keyword` in skill.pest.
 const KEYWORDS: &[&str] = &[
     "skill", "state", "learn", "terminal", "task", "step", "fallback", "import", "on", "in", "and", "or", "not",
-    "then", "at", "up", "to", "along", "position", "expect", "from", "within", "control", "move", "apply",
+    "then", "at", "up", "to", "along", "expect", "from", "within", "control", "move", "apply",
     "stiffness", "gains", "entry", "extend", "segment", "all",
 ];
 

@@ -164,6 +164,8 @@ pub enum Segmentation {
         cut: Cut,
         /// Segments shorter than this are merged into a neighbour [s].
         min_length_s: f64,
+        /// The demonstration channels clustered.
+        features: SegmentFeatures,
     },
     /// Change-point detection in the style of CHAMP (Niekum et al. 2015).
     Changepoint {
@@ -173,7 +175,26 @@ pub enum Segmentation {
         models: Vec<SegmentModel>,
         /// Bound on the particle set.
         max_particles: u32,
+        /// The demonstration channels modelled.
+        features: SegmentFeatures,
     },
+}
+
+/// Which demonstration channels segmentation looks at (each standardised).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SegmentFeatures {
+    /// The tool position (3 columns).
+    pub position: bool,
+    /// The force vector (3 columns).
+    pub force: bool,
+    /// The force magnitude (1 column), independent of direction.
+    pub force_magnitude: bool,
+}
+
+impl Default for SegmentFeatures {
+    fn default() -> Self {
+        SegmentFeatures { position: true, force: true, force_magnitude: false }
+    }
 }
 
 /// Agglomerative linkage criterion.

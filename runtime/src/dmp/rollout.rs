@@ -19,11 +19,16 @@ pub struct DmpRollout {
 }
 
 impl DmpRollout {
-    /// A rollout at rest at the demonstrated start, aiming at the demonstrated goal.
+    /// A rollout at the demonstrated start with the demonstrated initial velocity, aiming at
+    /// the demonstrated goal.
     pub fn new(dmp: &Dmp) -> Self {
+        let mut v = vec![0.0; dmp.n_dims()];
+        for (v, xd) in v.iter_mut().zip(&dmp.start_velocity) {
+            *v = dmp.tau_s * xd;
+        }
         Self {
             x: dmp.start.clone(),
-            v: vec![0.0; dmp.n_dims()],
+            v,
             start: dmp.start.clone(),
             goal: dmp.goal.clone(),
             tau_s: dmp.tau_s,

@@ -62,6 +62,11 @@ pub struct Dmp {
     pub goal: Vec<f64>,
     /// Forcing-term weights, `weights[channel][basis]`.
     pub weights: Vec<Vec<f64>>,
+    /// Demonstrated initial velocity `ẋ(0)`, one value per channel (units per second).
+    /// A rollout from the demonstrated start begins with it, so that profiles that start
+    /// moving (a force rising at touch-down) are reproduced; `restart_from` starts at rest.
+    #[serde(default)]
+    pub start_velocity: Vec<f64>,
 }
 
 impl Dmp {
@@ -93,7 +98,7 @@ impl Dmp {
         let (k, d) = (config.stiffness, config.damping());
         let (mut dx, mut ddx) = (vec![0.0; n], vec![0.0; n]);
         let mut targets = vec![vec![0.0; n]; channels.len()];
-        let (mut start, mut goal) = (Vec::new(), Vec::new());
+        let (mut start, mut goal, mut start_velocity) = (Vec::new(), Vec::new(), Vec::new());
         let stencil = Stencil::new(&times);
         for (channel, target) in channels.iter().zip(&mut targets) {
             stencil.apply(channel, &mut dx, &mut ddx);
@@ -104,6 +109,7 @@ impl Dmp {
             }
             start.push(x0);
             goal.push(g);
+            start_velocity.push(dx[0]);
         }
         let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
         let target_refs: Vec<&[f64]> = targets.iter().map(Vec::as_slice).collect();
@@ -115,6 +121,7 @@ impl Dmp {
             start,
             goal,
             weights,
+            start_velocity,
         })
     }
 

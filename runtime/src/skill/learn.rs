@@ -376,9 +376,9 @@ impl Learner<'_> {
             ir::FrameSource::ForceAlignedSamples { segment } => {
                 let seg = self.seg(*segment);
                 let range = seg.range();
-                let frames =
-                    force_aligned_frames(&demo.force_n[range.clone()], &demo.position_m[range], &ForceFrameConfig::default())
-                        .map_err(wrap)?;
+                let normal_force = without_friction(&demo.t_s[range.clone()], &demo.position_m[range.clone()], &demo.force_n[range.clone()]);
+                let frames = force_aligned_frames(&normal_force, &demo.position_m[range], &ForceFrameConfig::default())
+                    .map_err(wrap)?;
                 let t0 = demo.t_s[seg.start];
                 let mut poses = Vec::new();
                 let mut next_t = 0.0;
@@ -515,6 +515,33 @@ impl Learner<'_> {
             }
         })
     }
+}
+
+/// The measured forces without their component along the direction of motion.
+///
+/// While sliding, friction tilts the contact force against the motion by up to atan(µ) (17° at
+/// µ = 0.3); a frame aligned with the raw force would put its z 17° off the surface normal, and
+/// position control along its x would then push into and pull off the surface. Friction acts
+/// along the sliding direction, so removing the force component along the (smoothed) velocity
+/// leaves the normal force. Where the tool hardly moves (below 5 mm/s) the force is kept as is.
+fn without_friction(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    let n = position.len();
+    let window = smoothing_window(t);
+    let smoothed = smooth_points(position, window);
+    (0..n)
+        .map(|k| {
+            let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
+            let dt = t[b] - t[a];
+            let velocity = if dt > 0.0 { (smoothed[b] - smoothed[a]) / dt } else { Vector3::zeros() };
+            let speed = velocity.norm();
+            if speed < 0.005 {
+                force[k]
+            } else {
+                let along = velocity / speed;
+                force[k] - along * force[k].dot(&along)
+            }
+        })
+        .collect()
 }
 
 /// Force profiles are smoothed over this window before a DMP is fitted to them: fitting

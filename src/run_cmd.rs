@@ -16,9 +16,12 @@ pub struct RunArgs {
     /// The `.skill` file with the skill (or task) to run.
     pub file: PathBuf,
     /// The skill to run, when the file defines several.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "task")]
     pub skill: Option<String>,
-    /// The learned file (from `skillc learn`).
+    /// The task to run (default: the file's first task, when it has tasks and no --skill is given).
+    #[arg(long)]
+    pub task: Option<String>,
+    /// The learned file (from `skillc learn`); tasks name their own inputs.
     #[arg(long, conflicts_with = "demo")]
     pub learned: Option<PathBuf>,
     /// Learn from this demonstration first instead of reading a learned file.
@@ -82,6 +85,20 @@ pub fn run(args: &RunArgs) -> u8 {
 fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     if !(args.force_scale > 0.0 && args.speed > 0.0) {
         return Err(Failure::Usage("--force-scale and --speed must be positive".to_string()));
+    }
+    if args.skill.is_none() {
+        let compilation = crate::frontend::compile_path(&args.file).map_err(|err| Failure::Usage(err.to_string()))?;
+        if let Some(program) = &compilation.program {
+            let task = match &args.task {
+                Some(name) => Some(program.task(name).ok_or_else(|| {
+                    Failure::Usage(format!("`{}` has no task `{name}`", args.file.display()))
+                })?),
+                None => program.tasks.first(),
+            };
+            if let Some(task) = task {
+                return run_task(args, program, task);
+            }
+        }
     }
     let (_, skill) = load_skill(&args.file, args.skill.as_deref())?;
     let learned = match (&args.learned, &args.demo) {
@@ -176,4 +193,86 @@ pub fn summary(skill: &str, replay: bool, report: &RunReport, log: &RunLog) -> S
     };
     let _ = writeln!(out, "{status}: {}", report.message);
     out
+}
+
+/// Learns (or reads) what a task step needs.
+fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(skill_ir::Skill, Learned), Failure> {
+    let skill = program
+        .skill(&step.skill)
+        .cloned()
+        .ok_or_else(|| Failure::Input(format!("step `{}` runs unknown skill `{}`", step.name, step.skill)))?;
+    let learned = match &step.input {
+        skill_ir::StepInput::Demo(path) => learn_from_files(&skill, Path::new(path), &LearnOptions::default())
+            .map_err(|failure| match failure {
+                Failure::Input(message) => Failure::Input(format!("step `{}`: {message}", step.name)),
+                other => other,
+            })?,
+        skill_ir::StepInput::Learned(path) => read_learned(Path::new(path))?,
+    };
+    Ok((skill, learned))
+}
+
+fn bind_all<'b, 'a>(
+    steps: &'b [skill_ir::Step],
+    prepared: &'a [(skill_ir::Skill, Learned)],
+) -> Result<Vec<skill_runtime::exec::TaskStep<'b, 'a>>, Failure> {
+    steps
+        .iter()
+        .zip(prepared)
+        .map(|(step, (skill, learned))| {
+            bind(skill, learned)
+                .map(|bound| skill_runtime::exec::TaskStep { step, bound })
+                .map_err(|err| Failure::Input(format!("step `{}`: {err}", step.name)))
+        })
+        .collect()
+}
+
+fn run_task(args: &RunArgs, program: &skill_ir::Program, task: &skill_ir::Task) -> Result<(RunReport, String), Failure> {
+    use skill_runtime::exec::simulate_task;
+    let scene = load_scene(&args.scene, &args.sets)?;
+    let prepared: Vec<(skill_ir::Skill, Learned)> =
+        task.steps.iter().map(|step| step_learned(program, step)).collect::<Result<_, _>>()?;
+    let prepared_fallbacks: Vec<(skill_ir::Skill, Learned)> =
+        task.fallbacks.iter().map(|step| step_learned(program, step)).collect::<Result<_, _>>()?;
+    let steps = bind_all(&task.steps, &prepared)?;
+    let fallbacks = bind_all(&task.fallbacks, &prepared_fallbacks)?;
+    let (reports, log, outcome) =
+        simulate_task(&scene, &steps, &fallbacks, &ExecOptions::default()).map_err(|err| Failure::Input(error_chain(&err)))?;
+    if let Some(path) = &args.output {
+        atomic::write(path, log.to_csv().as_bytes())
+            .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
+    }
+    let mut text = String::new();
+    let _ = writeln!(text, "task `{}`: {} step(s)", task.name, reports.len());
+    for step in &reports {
+        let mut step_log = RunLog::default();
+        // Per-step statistics come from the step's own slice of the task log.
+        let prefix = format!("{}/", step.step);
+        for tick in &log.ticks {
+            let name = &log.states[tick.state as usize];
+            if let Some(state) = name.strip_prefix(&prefix) {
+                let mut tick = tick.clone();
+                tick.state = step_log.state_index(state);
+                step_log.ticks.push(tick);
+            }
+        }
+        let title = format!("{}step `{}` ({})", if step.fallback { "fallback " } else { "" }, step.step, step.skill);
+        let _ = write!(text, "{}", summary(&title, false, &step.report, &step_log).replacen("skill `", "", 1).replacen(&format!("{}`", title), &title, 1));
+    }
+    let status = match outcome {
+        skill_ir::Outcome::Success => "task succeeded",
+        skill_ir::Outcome::Failure => "TASK FAILED",
+    };
+    let _ = writeln!(text, "{status}");
+    if let Some(path) = &args.output {
+        let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), log.ticks.len());
+    }
+    let last = reports.last().map(|r| r.report.clone()).unwrap_or(RunReport {
+        outcome,
+        terminal: None,
+        message: String::new(),
+        visits: Vec::new(),
+        duration_s: 0.0,
+    });
+    Ok((RunReport { outcome, ..last }, text))
 }

@@ -21,4 +21,4 @@ mod session;
 pub use bind::{bind, BindError, BoundSkill};
 pub use log::{RunLog, Tick};
 pub use machine::{run_replay, run_skill, ExecError, ExecOptions, Rig, RunReport, Visit};
-pub use session::{simulate, Mode, SessionError};
+pub use session::{simulate, simulate_task, Mode, SessionError, StepReport, TaskStep};

@@ -48,3 +48,73 @@ pub fn simulate(scene: &Scene, mode: Mode<'_, '_>, options: &ExecOptions) -> Res
     };
     Ok((report, log))
 }
+
+/// One step of a task as it ran.
+#[derive(Debug, Clone)]
+pub struct StepReport {
+    /// The step's name.
+    pub step: String,
+    /// The skill it ran.
+    pub skill: String,
+    /// Whether it was a fallback.
+    pub fallback: bool,
+    /// How it ended.
+    pub report: RunReport,
+}
+
+/// A task step ready to run: its IR step and its bound skill.
+#[derive(Debug)]
+pub struct TaskStep<'b, 'a> {
+    /// The step.
+    pub step: &'b skill_ir::Step,
+    /// Its skill with learned features.
+    pub bound: BoundSkill<'a>,
+}
+
+/// Runs a task's steps in sequence on one simulated robot, each starting where the last ended
+/// (only the first moves to its demonstration's start first). A failing step runs its fallback,
+/// if it names one, and the task stops as a failure.
+pub fn simulate_task(
+    scene: &Scene,
+    steps: &[TaskStep<'_, '_>],
+    fallbacks: &[TaskStep<'_, '_>],
+    options: &ExecOptions,
+) -> Result<(Vec<StepReport>, RunLog, skill_ir::Outcome), SessionError> {
+    let mut plant = RapierPlant::from_scene(scene)?;
+    let spec = scene.spec();
+    let robot = plant.robot().clone();
+    let q0 = plant.observe().q;
+    let controller = HybridController::new(robot, &spec.robot.sensor, q0.as_slice(), ControllerGains::default())?;
+    let mut rig = Rig::new(&mut plant, controller, &spec.robot.sensor)?;
+    let mut log = RunLog::default();
+    let mut reports = Vec::new();
+    let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>, log: &mut RunLog| {
+        let step_options = ExecOptions { overrides: task_step.step.overrides, prepose: first && options.prepose, ..options.clone() };
+        let mut step_log = RunLog::default();
+        let report = run_skill(&task_step.bound, rig, &step_options, options.log.then_some(&mut step_log))?;
+        for mut tick in step_log.ticks {
+            tick.state = log.state_index(&format!("{}/{}", task_step.step.name, step_log.states[tick.state as usize]));
+            log.ticks.push(tick);
+        }
+        Ok::<_, ExecError>(StepReport {
+            step: task_step.step.name.clone(),
+            skill: task_step.step.skill.clone(),
+            fallback,
+            report,
+        })
+    };
+    for (index, task_step) in steps.iter().enumerate() {
+        let report = run_step(task_step, index == 0, false, &mut rig, &mut log)?;
+        let failed = report.report.outcome == skill_ir::Outcome::Failure;
+        reports.push(report);
+        if failed {
+            if let skill_ir::OnFailure::Fallback(fallback) = task_step.step.on_failure {
+                if let Some(fallback) = fallbacks.get(fallback as usize) {
+                    reports.push(run_step(fallback, false, true, &mut rig, &mut log)?);
+                }
+            }
+            return Ok((reports, log, skill_ir::Outcome::Failure));
+        }
+    }
+    Ok((reports, log, skill_ir::Outcome::Success))
+}

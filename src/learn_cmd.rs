@@ -28,6 +28,10 @@ pub struct LearnArgs {
     /// Resampling rate [Hz], overriding the template's `resample`.
     #[arg(long, value_name = "HZ")]
     pub resample: Option<f64>,
+    /// Also draw what was learned into this folder (SVG): the demonstration against the
+    /// rollout with segments and frames, forces in the world and compliant frames.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Why a command failed: a problem with the input (exit 1) or with usage or IO (exit 2).
@@ -130,6 +134,22 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
         .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", args.output.display())))?;
     let mut out = summary(&learned);
     let _ = writeln!(out, "wrote `{}`", args.output.display());
+    if let Some(dir) = &args.plot {
+        std::fs::create_dir_all(dir).map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
+        let view = crate::eval::SkillView {
+            name: &learned.skill,
+            learned: Some(&learned),
+            skill: Some(&skill),
+            error: None,
+            demo: args.demo.clone(),
+            criteria: crate::eval::Criteria::default(),
+        };
+        for kind in ["trajectory", "learned_force"] {
+            let path = dir.join(format!("{}_{kind}.svg", learned.skill));
+            crate::eval::plot::draw(kind, &path, &view, &[]).map_err(|err| Failure::Usage(format!("cannot plot `{kind}`: {err}")))?;
+            let _ = writeln!(out, "wrote `{}`", path.display());
+        }
+    }
     Ok(out)
 }
 

@@ -3,7 +3,7 @@
 //! the replay baseline; trials run in parallel and the results are the same for any thread count.
 
 pub mod metrics;
-mod plot;
+pub mod plot;
 mod report;
 
 use std::path::{Path, PathBuf};

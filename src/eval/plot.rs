@@ -41,13 +41,15 @@ fn flange_to_tool() -> Isometry3<f64> {
     }
 }
 
-/// Draws one kind of plot for a skill into `path`.
-pub(super) fn draw(kind: &str, path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> Result<(), String> {
+/// Draws one kind of plot for a skill into `path`: `trajectory`, `force`, `world_force`,
+/// `timeline` (these take the trials' outcomes) or `learned_force` (the demonstration only).
+pub fn draw(kind: &str, path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> Result<(), String> {
     match kind {
         "trajectory" => trajectory(path, skill, runs),
         "force" => force(path, skill, runs),
         "world_force" => world_force(path, skill, runs),
         "timeline" => timeline(path, runs),
+        "learned_force" => learned_force(path, skill),
         other => return Err(format!("unknown plot `{other}`")),
     }
     .map_err(|err| err.to_string())
@@ -207,7 +209,9 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
 
 fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
     let replay_z = skill.learned.and_then(|l| l.frames.values().next()).map_or(Vector3::z(), |f| f.at(0.0).rotation * Vector3::z());
-    let series: Vec<(String, bool, Vec<(f64, f64)>, Vec<(f64, f64)>)> = runs
+    // Per trial: variant, replay or not, measured and desired force over time.
+    type Series = (String, bool, Vec<(f64, f64)>, Vec<(f64, f64)>);
+    let series: Vec<Series> = runs
         .iter()
         .map(|o| {
             let t0 = start_time(&o.log);
@@ -268,6 +272,75 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
             chart.draw_series(desired.iter().step_by(5).map(|&(t, f)| Circle::new((t, f.clamp(y0, y1)), 1, BLACK.filled())))?;
         }
+    }
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 11)).draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// The demonstration's applied force along each learned frame's z, with the learned desired
+/// forces over their segments (thesis Fig. 4.7, 5.9c).
+fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
+    let demo = read_csv(&skill.demo, &ReadOptions::default()).map_err(|e| e.to_string())?.demo;
+    let (Some(learned), Some(ir)) = (skill.learned, skill.skill) else {
+        return Err("nothing learned to plot".into());
+    };
+    let t0 = demo.t_s.first().copied().unwrap_or(0.0);
+    let root = SVGBackend::new(path, (1300, 520)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut lines: Vec<(String, RGBColor, Vec<(f64, f64)>, bool)> = Vec::new();
+    for (index, decl) in ir.learn.frames.iter().enumerate() {
+        let Some(frame) = learned.frames.get(&decl.name) else { continue };
+        let segment_start = match &decl.source {
+            skill_ir::FrameSource::ForceAlignedSamples { segment } => {
+                learned.segments.get(segment.index()).map_or(0.0, |s| s.start_s)
+            }
+            _ => 0.0,
+        };
+        let points = demo
+            .t_s
+            .iter()
+            .zip(&demo.force_n)
+            .step_by(5)
+            .map(|(t, f)| (t - t0, -f.dot(&(frame.at(t - segment_start).rotation * Vector3::z()))))
+            .collect();
+        lines.push((format!("demonstration along {}.z", decl.name), trial_colour(index), points, false));
+    }
+    for decl in &ir.learn.forces {
+        let Some(force) = learned.forces.get(&decl.name) else { continue };
+        let segment = match &decl.source {
+            skill_ir::ForceSource::Constant { segment, .. }
+            | skill_ir::ForceSource::Dmp { segment, .. }
+            | skill_ir::ForceSource::Magnitude { segment, .. } => Some(segment.index()),
+            _ => None,
+        };
+        let Some(segment) = segment.and_then(|s| learned.segments.get(s)) else { continue };
+        let duration = segment.end_s - segment.start_s;
+        let points = (0..=200)
+            .map(|k| {
+                let t = duration * k as f64 / 200.0;
+                (segment.start_s - t0 + t, super::metrics::desired_at(force, t))
+            })
+            .collect();
+        lines.push((format!("learned `{}`", decl.name), BLACK, points, true));
+    }
+    let ((x0, x1), (y0, y1)) = bounds(lines.iter().flat_map(|(_, _, p, _)| p.iter().copied()));
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("{} — applied force along the compliant z, and the learned force", skill.name), ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart.configure_mesh().x_desc("demonstration time [s]").y_desc("force [N]").draw()?;
+    for segment in &learned.segments {
+        let colour = SEGMENT_COLOURS[learned.segments.iter().position(|s| s == segment).unwrap_or(0) % 4].mix(0.08);
+        chart.draw_series(std::iter::once(Rectangle::new([(segment.start_s - t0, y0), (segment.end_s - t0, y1)], colour.filled())))?;
+    }
+    for (label, colour, points, thick) in lines {
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(if thick { 3 } else { 1 })))?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
     }
     chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 11)).draw()?;
     root.present()?;

@@ -86,6 +86,11 @@ pub enum Command {
   skillc learn stdlib-skills/press.skill examples/demos/press.csv -o press.learned.json
   skillc learn my.skill demo.csv -o my.learned.json --skill wipe --lowpass 20")]
     Learn(crate::learn_cmd::LearnArgs),
+    /// The kinematic rollout of a learned file's motions, in the demonstration's CSV columns.
+    #[command(after_help = "Examples:
+  skillc rollout press.learned.json -o press.rollout.csv
+  skillc rollout slide.learned.json --goal-offset 0,0,-0.05")]
+    Rollout(crate::learn_cmd::RolloutArgs),
     /// Reproduce a skill in simulation, in the demonstrated scene or a changed one.
     #[command(after_help = "Examples:
   skillc run stdlib-skills/slide.skill --demo examples/demos/slide.csv --scene examples/scenes/table.toml --set table.z=0.195
@@ -163,6 +168,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Dump { stage, file } => dump(&file, stage),
         Command::Demos { out, check } => demos(&out, check),
         Command::Learn(args) => crate::learn_cmd::run(&args),
+        Command::Rollout(args) => crate::learn_cmd::rollout(&args),
         Command::Run(args) => crate::run_cmd::run(&args),
         Command::Eval(args) => crate::eval::run(&args),
         Command::Robot(args) => match crate::robot_cmd::run(&args) {

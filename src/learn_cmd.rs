@@ -248,3 +248,58 @@ pub fn summary(learned: &Learned) -> String {
     }
     out
 }
+
+/// Arguments of `skillc rollout`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RolloutArgs {
+    /// The learned file.
+    pub learned: PathBuf,
+    /// Write the rollout here (CSV in the demonstration's columns) instead of standard output.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Move every motion goal by DX,DY,DZ metres (base frame).
+    #[arg(long, value_name = "DX,DY,DZ", value_delimiter = ',', allow_hyphen_values = true)]
+    pub goal_offset: Option<Vec<f64>>,
+    /// Sample period [s].
+    #[arg(long, default_value_t = 0.001)]
+    pub dt: f64,
+}
+
+/// Runs `skillc rollout`: the kinematic rollout of every learned motion in segment order.
+pub fn rollout(args: &RolloutArgs) -> u8 {
+    let run = || -> Result<(), Failure> {
+        if !(args.dt > 0.0 && args.dt.is_finite()) {
+            return Err(Failure::Usage("--dt must be a positive number of seconds".into()));
+        }
+        let learned = crate::run_cmd::read_learned(&args.learned)?;
+        let offset = match args.goal_offset.as_deref() {
+            Some([dx, dy, dz]) => nalgebra::Vector3::new(*dx, *dy, *dz),
+            Some(_) => return Err(Failure::Usage("--goal-offset takes three numbers: DX,DY,DZ".into())),
+            None => nalgebra::Vector3::zeros(),
+        };
+        let (samples, _) = skill_runtime::skill::rollout::preview(&learned, args.dt, offset);
+        let mut text = String::from("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n");
+        for sample in &samples {
+            let q = sample.orientation.quaternion();
+            let p = sample.position_m;
+            let _ = writeln!(
+                text,
+                "{:.4},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},0,0,0,0,0,0",
+                sample.t_s, p.x, p.y, p.z, q.w, q.i, q.j, q.k
+            );
+        }
+        match &args.output {
+            Some(path) => {
+                atomic::write(path, text.as_bytes())
+                    .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
+                eprintln!("wrote `{}` ({} samples)", path.display(), samples.len());
+            }
+            None => print!("{text}"),
+        }
+        Ok(())
+    };
+    match run() {
+        Ok(()) => 0,
+        Err(failure) => failure.report(),
+    }
+}

@@ -150,3 +150,57 @@ fn robot_json_has_exactly_the_documented_keys() {
     assert_eq!(out.status.code(), Some(2), "a wrong-length configuration is a usage error");
     assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
 }
+
+#[test]
+fn learn_writes_a_learned_file_with_the_documented_keys_and_rollout_previews_it() {
+    let dir = temp_dir("learn");
+    let learned = dir.join("slide.learned.json");
+    let plots = dir.join("plots");
+    let out = skillc(&[
+        "learn",
+        "stdlib-skills/slide.skill",
+        "examples/demos/slide.csv",
+        "-o",
+        learned.to_str().expect("utf8"),
+        "--plot",
+        plots.to_str().expect("utf8"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("segments:") && stdout.contains("planar"), "{stdout}");
+    let value: serde_json::Value = serde_json::from_slice(&std::fs::read(&learned).expect("written")).expect("JSON");
+    for key in ["segments", "frames", "forces", "quality", "ir_hash"] {
+        assert!(value.get(key).is_some(), "missing `{key}`");
+    }
+    assert_eq!(value["segments"].as_array().expect("list").len(), 3);
+    assert_eq!(value["frames"]["surface"]["kind"], "planar");
+    assert_eq!(value["forces"]["push"]["kind"], "constant");
+    let force = value["forces"]["push"]["value_n"].as_f64().expect("a number");
+    assert!((force - 10.0).abs() < 0.3, "learned {force} N, the demonstration pressed 10 N");
+    assert!(plots.join("slide_trajectory.svg").exists() && plots.join("slide_learned_force.svg").exists());
+
+    let out = skillc(&["rollout", learned.to_str().expect("utf8"), "--goal-offset", "0,0,-0.05"]);
+    assert_eq!(out.status.code(), Some(0));
+    let csv = String::from_utf8_lossy(&out.stdout);
+    assert!(csv.starts_with("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n"));
+    assert!(csv.lines().count() > 8000, "the three motions at 1 kHz");
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+#[test]
+fn learn_refuses_a_demonstration_without_contact_and_writes_nothing() {
+    let dir = temp_dir("nocontact");
+    let demo = dir.join("free.csv");
+    let mut text = String::from("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n");
+    for k in 0..2000 {
+        let t = k as f64 * 0.001;
+        text.push_str(&format!("{t},{},0,0.4,1,0,0,0,0.01,0,0.02,0,0,0\n", 0.5 + 0.05 * t));
+    }
+    std::fs::write(&demo, text).expect("write");
+    let learned = dir.join("touch.learned.json");
+    let out = skillc(&["learn", "stdlib-skills/touch.skill", demo.to_str().expect("utf8"), "-o", learned.to_str().expect("utf8")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no contact"), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!learned.exists());
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

@@ -6,15 +6,22 @@ use skill_runtime::plant::Plant;
 use skill_runtime::sim::{RapierPlant, Scene};
 
 fn scene(name: &str) -> Scene {
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes").join(name);
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/scenes")
+        .join(name);
     Scene::from_file(&path).expect("example scene loads")
 }
 
 fn setup(scene: &Scene) -> (RapierPlant, HybridController) {
     let plant = RapierPlant::from_scene(scene).expect("scene builds");
     let q0 = plant.observe().q;
-    let controller =
-        HybridController::new(plant.robot().clone(), "lwr_flange", q0.as_slice(), ControllerGains::default()).expect("controller");
+    let controller = HybridController::new(
+        plant.robot().clone(),
+        "lwr_flange",
+        q0.as_slice(),
+        ControllerGains::default(),
+    )
+    .expect("controller");
     (plant, controller)
 }
 
@@ -47,3 +54,47 @@ fn holding_the_start_pose_keeps_the_tool_still() {
     let _ = Vector6::<f64>::zeros();
 }
 
+#[test]
+fn sliding_over_the_drum_follows_its_curvature() {
+    // Contact recycling froze the drum's contact normal: the probe rode a tangent plane up to
+    // 5 mm off the surface while still pushing. Slide 20° along the drum, target 5 mm inside it.
+    let scene = scene("cylinder.toml");
+    let (mut plant, mut controller) = setup(&scene);
+    let (axis_x, axis_z, radius) = (0.5466, 0.15, 0.16);
+    let mut obs = plant.observe();
+    controller.observe(&obs);
+    let rotation = controller.state().tool.rotation;
+    let mut worst_gap: f64 = 0.0;
+    for step in 0..4000 {
+        plant.observe_into(&mut obs);
+        controller.observe(&obs);
+        let (r, angle) = match step {
+            0..2000 => (0.2, -30.0_f64),
+            2000..2500 => (0.155, -30.0),
+            _ => (0.155, -30.0 + (step - 2500) as f64 * 0.0133),
+        };
+        let (s, c) = angle.to_radians().sin_cos();
+        let target = nalgebra::Translation3::new(axis_x + r * s, 0.0, axis_z + r * c);
+        let mut cmd = Command::hold(
+            Isometry3::from_parts(target, rotation),
+            [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0],
+        );
+        cmd.frame = Isometry3::from_parts(controller.state().tool.translation, UnitQuaternion::identity());
+        let torques = controller.torques(&obs, &cmd, 0.001).to_vec();
+        plant.apply(&torques).expect("apply");
+        plant.step(0.001).expect("step");
+        if step >= 2600 {
+            let p = controller.state().tool.translation.vector;
+            let gap = (p.x - axis_x).hypot(p.z - axis_z) - radius;
+            worst_gap = worst_gap.max(gap.abs());
+            assert!(
+                controller.state().applied.fixed_rows::<3>(0).norm() > 2.0,
+                "lost contact at step {step}"
+            );
+        }
+    }
+    assert!(
+        worst_gap < 5e-4,
+        "the tool centre left the drum's offset surface by {worst_gap} m"
+    );
+}

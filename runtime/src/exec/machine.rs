@@ -111,7 +111,10 @@ pub struct Rig<'p> {
 
 impl std::fmt::Debug for Rig<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Rig").field("t_s", &self.t_s).field("flange_to_tool", &self.flange_to_tool).finish()
+        f.debug_struct("Rig")
+            .field("t_s", &self.t_s)
+            .field("flange_to_tool", &self.flange_to_tool)
+            .finish()
     }
 }
 
@@ -126,7 +129,14 @@ impl<'p> Rig<'p> {
         robot.forward_kinematics(&mut data, obs.q.as_slice());
         let flange_to_tool = robot.link_in_base(&data, flange).inverse() * robot.tool_in_base(&data);
         let torques = vec![0.0; obs.q.len()];
-        Ok(Rig { plant, controller, flange_to_tool, obs, torques, t_s: 0.0 })
+        Ok(Rig {
+            plant,
+            controller,
+            flange_to_tool,
+            obs,
+            torques,
+            t_s: 0.0,
+        })
     }
 
     /// Run time so far [s].
@@ -158,21 +168,42 @@ impl<'p> Rig<'p> {
     }
 
     /// Computes and applies torques for `cmd`, steps the plant, and logs the tick.
-    fn act(&mut self, cmd: &Command, state: u32, state_name: &str, log: Option<&mut RunLog>, dt: f64) -> Result<(), ExecError> {
+    fn act(
+        &mut self,
+        cmd: &Command,
+        state: u32,
+        state_name: &str,
+        log: Option<&mut RunLog>,
+        dt: f64,
+    ) -> Result<(), ExecError> {
         let torques = self.controller.torques(&self.obs, cmd, dt);
         self.torques.copy_from_slice(torques);
         if let Some(log) = log {
-            log.ticks.push(tick_record(self.t_s, state, cmd, &self.controller, &self.torques));
+            log.ticks
+                .push(tick_record(self.t_s, state, cmd, &self.controller, &self.torques));
         }
-        let wrap = |source| ExecError::Plant { state: state_name.to_string(), t_s: self.t_s, source };
+        let wrap = |source| ExecError::Plant {
+            state: state_name.to_string(),
+            t_s: self.t_s,
+            source,
+        };
         self.plant.apply(&self.torques).map_err(wrap)?;
-        self.plant.step(dt).map_err(|source| ExecError::Plant { state: state_name.to_string(), t_s: self.t_s, source })?;
+        self.plant.step(dt).map_err(|source| ExecError::Plant {
+            state: state_name.to_string(),
+            t_s: self.t_s,
+            source,
+        })?;
         self.t_s += dt;
         Ok(())
     }
 
     /// The tool pose and twist commanded for a flange pose and twist.
-    fn tool_command(&self, flange: &Isometry3<f64>, flange_v: &Vector3<f64>, omega: &Vector3<f64>) -> (Isometry3<f64>, Vector6<f64>) {
+    fn tool_command(
+        &self,
+        flange: &Isometry3<f64>,
+        flange_v: &Vector3<f64>,
+        omega: &Vector3<f64>,
+    ) -> (Isometry3<f64>, Vector6<f64>) {
         let tool = flange * self.flange_to_tool;
         let lever = flange.rotation * self.flange_to_tool.translation.vector;
         let v = flange_v + omega.cross(&lever);
@@ -180,7 +211,12 @@ impl<'p> Rig<'p> {
     }
 
     /// Moves the flange to `target` in free space along a minimum-jerk path, then holds briefly.
-    fn prepose(&mut self, target: &Isometry3<f64>, options: &ExecOptions, log: &mut Option<&mut RunLog>) -> Result<(), ExecError> {
+    fn prepose(
+        &mut self,
+        target: &Isometry3<f64>,
+        options: &ExecOptions,
+        log: &mut Option<&mut RunLog>,
+    ) -> Result<(), ExecError> {
         self.sense();
         let start = self.flange();
         let distance = (target.translation.vector - start.translation.vector).norm();
@@ -323,7 +359,11 @@ impl<'b, 'a> Machine<'b, 'a> {
         if let Some(motion_id) = active.motion {
             let learned = self.bound.motions[motion_id.index()];
             let motion_name = self.skill().learn.motions[motion_id.index()].name.clone();
-            let fail = |reason: String| ExecError::Motion { state: name.clone(), motion: motion_name.clone(), reason };
+            let fail = |reason: String| ExecError::Motion {
+                state: name.clone(),
+                motion: motion_name.clone(),
+                reason,
+            };
             let mut position = learned.position.rollout();
             let mut orientation = learned.orientation.rollout();
             let p = flange.translation.vector;
@@ -332,9 +372,18 @@ impl<'b, 'a> Machine<'b, 'a> {
             let offset = Vector3::from(self.overrides.goal_offset_m);
             let goal = Vector3::from_column_slice(&learned.position.goal) + offset;
             position.set_goal(goal.as_slice()).map_err(|e| fail(e.to_string()))?;
-            position.set_tau(learned.position.tau_s / speed).map_err(|e| fail(e.to_string()))?;
-            orientation.set_tau(learned.orientation.tau_s / speed).map_err(|e| fail(e.to_string()))?;
-            self.motion = Some(RunningMotion { id: motion_id.index(), position, orientation, goal });
+            position
+                .set_tau(learned.position.tau_s / speed)
+                .map_err(|e| fail(e.to_string()))?;
+            orientation
+                .set_tau(learned.orientation.tau_s / speed)
+                .map_err(|e| fail(e.to_string()))?;
+            self.motion = Some(RunningMotion {
+                id: motion_id.index(),
+                position,
+                orientation,
+                goal,
+            });
         }
         if let Some(force_id) = active.force {
             if let LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } = self.bound.forces[force_id.index()] {
@@ -407,10 +456,16 @@ impl<'b, 'a> Machine<'b, 'a> {
 
     /// Whether every DMP of the state has run out (and any extension is used up and settled).
     fn motion_done(&self, t: f64) -> bool {
-        let motion_finished = self.motion.as_ref().is_none_or(|m| m.position.time_s() >= m.position.tau_s());
+        let motion_finished = self
+            .motion
+            .as_ref()
+            .is_none_or(|m| m.position.time_s() >= m.position.tau_s());
         let profile_finished = self.force_profile.as_ref().is_none_or(|p| p.time_s() >= p.tau_s());
         let runs_something = self.motion.is_some() || self.force_profile.is_some();
-        let extension_finished = self.extension.as_ref().is_none_or(|e| e.exhausted_at_s.is_some_and(|at| t - at >= 0.2));
+        let extension_finished = self
+            .extension
+            .as_ref()
+            .is_none_or(|e| e.exhausted_at_s.is_some_and(|at| t - at >= 0.2));
         runs_something && motion_finished && profile_finished && extension_finished
     }
 
@@ -441,12 +496,9 @@ impl<'b, 'a> Machine<'b, 'a> {
                 extension.done_m = (extension.done_m + extension.speed_mps * dt).min(extension.max_m);
             }
             let shift = extension.axis * extension.done_m;
-            match &mut self.motion {
-                Some(motion) => {
-                    let goal = motion.goal + shift;
-                    let _ = motion.position.set_goal(goal.as_slice());
-                }
-                None => {}
+            if let Some(motion) = &mut self.motion {
+                let goal = motion.goal + shift;
+                let _ = motion.position.set_goal(goal.as_slice());
             }
         }
         if let Some(motion) = &mut self.motion {
@@ -454,10 +506,13 @@ impl<'b, 'a> Machine<'b, 'a> {
             motion.position.step(&learned.position, dt);
             motion.orientation.step(&learned.orientation, dt);
         }
-        let profile_dmp = self.active().and_then(|active| active.force).and_then(|id| match self.bound.forces[id.index()] {
-            LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } => Some(dmp),
-            _ => None,
-        });
+        let profile_dmp =
+            self.active()
+                .and_then(|active| active.force)
+                .and_then(|id| match self.bound.forces[id.index()] {
+                    LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } => Some(dmp),
+                    _ => None,
+                });
         if let (Some(profile), Some(dmp)) = (&mut self.force_profile, profile_dmp) {
             profile.step(dmp, dt);
         }
@@ -526,14 +581,24 @@ fn unit(axis: ir::Axis) -> Vector3<f64> {
 /// The largest force error over the force-controlled axes, in the compliant frame.
 fn force_error(cmd: &Command, applied: &Vector6<f64>) -> Option<f64> {
     let rotation = cmd.frame.rotation.inverse();
-    let desired = (rotation * cmd.wrench.fixed_rows::<3>(0).into_owned(), rotation * cmd.wrench.fixed_rows::<3>(3).into_owned());
-    let measured = (rotation * applied.fixed_rows::<3>(0).into_owned(), rotation * applied.fixed_rows::<3>(3).into_owned());
+    let desired = (
+        rotation * cmd.wrench.fixed_rows::<3>(0).into_owned(),
+        rotation * cmd.wrench.fixed_rows::<3>(3).into_owned(),
+    );
+    let measured = (
+        rotation * applied.fixed_rows::<3>(0).into_owned(),
+        rotation * applied.fixed_rows::<3>(3).into_owned(),
+    );
     let mut worst: Option<f64> = None;
     for axis in 0..6 {
         if cmd.position[axis] {
             continue;
         }
-        let error = if axis < 3 { desired.0[axis] - measured.0[axis] } else { desired.1[axis - 3] - measured.1[axis - 3] };
+        let error = if axis < 3 {
+            desired.0[axis] - measured.0[axis]
+        } else {
+            desired.1[axis - 3] - measured.1[axis - 3]
+        };
         worst = Some(worst.map_or(error.abs(), |w: f64| w.max(error.abs())));
     }
     worst
@@ -544,7 +609,12 @@ fn location(span: &ir::SourceSpan) -> String {
 }
 
 /// Runs a bound skill on a rig until a terminal state (or the time limit).
-pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOptions, mut log: Option<&mut RunLog>) -> Result<RunReport, ExecError> {
+pub fn run_skill(
+    bound: &BoundSkill<'_>,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+    mut log: Option<&mut RunLog>,
+) -> Result<RunReport, ExecError> {
     let skill = bound.skill;
     let start_s = rig.t_s;
     if options.prepose {
@@ -568,7 +638,11 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
         velocity: [0.0; 3],
     };
     machine.enter(skill.initial, rig.t_s, rig)?;
-    let mut visits = vec![Visit { state: skill.states[skill.initial.index()].name.clone(), enter_s: rig.t_s - start_s, exit_s: 0.0 }];
+    let mut visits = vec![Visit {
+        state: skill.states[skill.initial.index()].name.clone(),
+        enter_s: rig.t_s - start_s,
+        exit_s: 0.0,
+    }];
     let mut last_cmd: Option<Command> = None;
     let dt = options.dt_s;
     loop {
@@ -581,7 +655,13 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
                 ir::Outcome::Success => format!("reached `{}`", state.name),
                 ir::Outcome::Failure => format!("ended in failure state `{}`", state.name),
             });
-            return Ok(RunReport { outcome: *outcome, terminal: Some(state.name.clone()), message: text, visits, duration_s: t - start_s });
+            return Ok(RunReport {
+                outcome: *outcome,
+                terminal: Some(state.name.clone()),
+                message: text,
+                visits,
+                duration_s: t - start_s,
+            });
         }
         if t - run_start > options.max_duration_s {
             let last = visits.last_mut().expect("a visit per state");
@@ -603,7 +683,9 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
         let sensed = Sensed {
             tool: rig.tool(),
             applied: rig.controller.state().applied,
-            force_error_max: last_cmd.as_ref().and_then(|cmd| force_error(cmd, &rig.controller.state().applied)),
+            force_error_max: last_cmd
+                .as_ref()
+                .and_then(|cmd| force_error(cmd, &rig.controller.state().applied)),
         };
         let _ = sensed.tool;
 
@@ -619,7 +701,12 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
                     next = Some((*target, transition_id.index()));
                     break;
                 }
-                ir::TransitionAction::Extend { along, speed_mps, max_m, then } => {
+                ir::TransitionAction::Extend {
+                    along,
+                    speed_mps,
+                    max_m,
+                    then,
+                } => {
                     match &machine.extension {
                         Some(extension) if extension.transition == transition_id.index() => {
                             if extension.exhausted_at_s.is_some() {
@@ -653,11 +740,21 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
             let last = visits.last_mut().expect("a visit per state");
             last.exit_s = t - start_s;
             let transition = &skill.transitions[transition];
-            visits.push(Visit { state: skill.states[target.index()].name.clone(), enter_s: t - start_s, exit_s: 0.0 });
+            visits.push(Visit {
+                state: skill.states[target.index()].name.clone(),
+                enter_s: t - start_s,
+                exit_s: 0.0,
+            });
             machine.enter(target, t, rig)?;
-            if let ir::StateKind::Terminal { outcome: ir::Outcome::Failure, message } = &skill.states[target.index()].kind {
+            if let ir::StateKind::Terminal {
+                outcome: ir::Outcome::Failure,
+                message,
+            } = &skill.states[target.index()].kind
+            {
                 let from = &skill.states[transition.from.index()].name;
-                let why = message.clone().unwrap_or_else(|| format!("ended in failure state `{}`", skill.states[target.index()].name));
+                let why = message
+                    .clone()
+                    .unwrap_or_else(|| format!("ended in failure state `{}`", skill.states[target.index()].name));
                 let timed_out = matches!(transition.guard, ir::Guard::Timeout { .. });
                 let text = format!(
                     "{why}: {} `on {}` in state `{from}` ({})",
@@ -689,7 +786,12 @@ pub fn run_skill(bound: &BoundSkill<'_>, rig: &mut Rig<'_>, options: &ExecOption
 /// force control and no contact adaptation. Segments run in order: a segment with a learned
 /// motion replays it from the current pose; a segment without one (e.g. the press itself)
 /// holds the pose for the segment's duration, as the demonstration did.
-pub fn run_replay(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions, mut log: Option<&mut RunLog>) -> Result<RunReport, ExecError> {
+pub fn run_replay(
+    learned: &Learned,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+    mut log: Option<&mut RunLog>,
+) -> Result<RunReport, ExecError> {
     let start_s = rig.t_s;
     let order = motions_in_order(learned);
     if options.prepose {
@@ -717,13 +819,24 @@ pub fn run_replay(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions, m
             Some((name, motion)) => {
                 let mut position = motion.position.rollout();
                 let mut orientation = motion.orientation.rollout();
-                let fail = |reason: String| ExecError::Motion { state: state_name.clone(), motion: (*name).clone(), reason };
-                position.restart_from(held.translation.vector.as_slice()).map_err(|e| fail(e.to_string()))?;
+                let fail = |reason: String| ExecError::Motion {
+                    state: state_name.clone(),
+                    motion: (*name).clone(),
+                    reason,
+                };
+                position
+                    .restart_from(held.translation.vector.as_slice())
+                    .map_err(|e| fail(e.to_string()))?;
                 orientation.restart_from(held.rotation);
-                let goal = Vector3::from_column_slice(&motion.position.goal) + Vector3::from(options.overrides.goal_offset_m);
+                let goal =
+                    Vector3::from_column_slice(&motion.position.goal) + Vector3::from(options.overrides.goal_offset_m);
                 position.set_goal(goal.as_slice()).map_err(|e| fail(e.to_string()))?;
-                position.set_tau(motion.position.tau_s / speed).map_err(|e| fail(e.to_string()))?;
-                orientation.set_tau(motion.orientation.tau_s / speed).map_err(|e| fail(e.to_string()))?;
+                position
+                    .set_tau(motion.position.tau_s / speed)
+                    .map_err(|e| fail(e.to_string()))?;
+                orientation
+                    .set_tau(motion.orientation.tau_s / speed)
+                    .map_err(|e| fail(e.to_string()))?;
                 let steps = ((motion.position.tau_s / speed) / dt).round() as usize;
                 for _ in 0..steps {
                     position.step(&motion.position, dt);
@@ -731,7 +844,8 @@ pub fn run_replay(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions, m
                     position.velocity_into(&mut velocity);
                     let p = Vector3::from_column_slice(position.position());
                     held = Isometry3::from_parts(Translation3::from(p), orientation.orientation());
-                    let (pose, twist) = rig.tool_command(&held, &Vector3::from(velocity), &orientation.angular_velocity());
+                    let (pose, twist) =
+                        rig.tool_command(&held, &Vector3::from(velocity), &orientation.angular_velocity());
                     let mut cmd = Command::hold(pose, options.replay_stiffness);
                     cmd.twist = twist;
                     cmd.frame = Isometry3::from_parts(rig.tool().translation, UnitQuaternion::identity());
@@ -750,7 +864,11 @@ pub fn run_replay(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions, m
                 }
             }
         }
-        visits.push(Visit { state: state_name, enter_s, exit_s: rig.t_s - start_s });
+        visits.push(Visit {
+            state: state_name,
+            enter_s,
+            exit_s: rig.t_s - start_s,
+        });
     }
     Ok(RunReport {
         outcome: ir::Outcome::Success,

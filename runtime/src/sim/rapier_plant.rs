@@ -6,7 +6,7 @@
 use nalgebra::{DVector, Isometry3, IsometryMatrix3, Matrix3, UnitQuaternion, Vector3, Vector6};
 use rapier3d::math::{Pose, Real, Rotation, Vector};
 use rapier3d::prelude::{
-    CCDSolver, CoefficientCombineRule, ColliderBuilder, ColliderHandle, ColliderSet, DefaultBroadPhase,
+    ActiveHooks, CCDSolver, CoefficientCombineRule, ColliderBuilder, ColliderHandle, ColliderSet, DefaultBroadPhase,
     GenericJointBuilder, Group, ImpulseJointSet, IntegrationParameters, InteractionGroups, InteractionTestMode,
     IslandManager, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle, MultibodyJointSet, NarrowPhase,
     PairContacts, PhysicsPipeline, RigidBodyBuilder, RigidBodyHandle, RigidBodySet, SoftBodySet, SpringCoefficients,
@@ -408,7 +408,13 @@ impl RapierPlant {
                             object.length.unwrap_or(0.1) as Real / 2.0,
                             object.radius.unwrap_or(0.1) as Real,
                         )
-                        .position(z_to_y()),
+                        .position(z_to_y())
+                        // rapier 0.36 recycles a pair's contacts while the relative pose drifts less than
+                        // 5 cm (`contact_recycling`): normal and gap stay frozen. Exact on flat faces, but a
+                        // probe sliding over the drum rode the frozen tangent plane up to 5 mm off the
+                        // surface, still pushed, then dropped back and re-impacted (150-440 N). Pairs with
+                        // an active hook are never recycled; the hooks are `()`, which change nothing.
+                        .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
                     );
                     self.colliders.insert_with_parent(collider, body, &mut self.bodies);
                 }

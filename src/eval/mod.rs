@@ -4,6 +4,7 @@
 
 pub mod metrics;
 pub mod plot;
+pub mod real;
 mod report;
 
 use std::path::{Path, PathBuf};
@@ -42,6 +43,11 @@ pub struct EvalArgs {
     /// Skip the replay baseline.
     #[arg(long)]
     pub no_replay: bool,
+    /// Also learn the slide skill from every real demonstration in this folder (CSV files like
+    /// ../shared/data/lasa_wiping_lwr4/csv/), compare with `segment_labels.csv` there, and
+    /// reproduce each on a table at the learned plane.
+    #[arg(long, value_name = "DIR")]
+    pub real: Option<PathBuf>,
 }
 
 /// A trials file.
@@ -341,7 +347,17 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let table = report::table(&outcomes);
     print!("{table}");
     println!("{} trials in {elapsed:.1} s", outcomes.len());
-    let written = report::write(&args.out, &prepared_views(&prepared), &outcomes, elapsed, &table)
+    let real = match &args.real {
+        Some(dir) => {
+            let (_, slide) = load_skill(Path::new("stdlib-skills/slide.skill"), None)?;
+            let results = pool.install(|| real::evaluate(dir, &slide, Path::new("examples/scenes/table.toml")))
+                .map_err(Failure::Usage)?;
+            print!("{}", report::real_table(&results));
+            results
+        }
+        None => Vec::new(),
+    };
+    let written = report::write(&args.out, &prepared_views(&prepared), &outcomes, elapsed, &table, &real)
         .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
     println!("report: {}", written.display());
     let any_error = outcomes.iter().any(|o| o.result.error);

@@ -3,6 +3,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use super::real::RealResult;
 use super::{plot, Outcome, SkillView};
 use crate::atomic;
 
@@ -66,12 +67,20 @@ fn escape(text: &str) -> String {
 }
 
 /// Writes `summary.json`, the plots and `index.html` into `out`; returns the HTML's path.
-pub(super) fn write(out: &Path, skills: &[SkillView<'_>], outcomes: &[Outcome], elapsed_s: f64, table: &str) -> std::io::Result<PathBuf> {
+pub(super) fn write(
+    out: &Path,
+    skills: &[SkillView<'_>],
+    outcomes: &[Outcome],
+    elapsed_s: f64,
+    table: &str,
+    real: &[RealResult],
+) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(out.join("plots"))?;
     let summary = serde_json::json!({
         "elapsed_s": elapsed_s,
         "threads": rayon::current_num_threads(),
         "trials": outcomes.iter().map(|o| &o.result).collect::<Vec<_>>(),
+        "real": real,
         "skills": skills.iter().map(|s| serde_json::json!({
             "name": s.name,
             "criteria": s.criteria,
@@ -149,8 +158,40 @@ pub(super) fn write(out: &Path, skills: &[SkillView<'_>], outcomes: &[Outcome], 
             }
         }
     }
+    if !real.is_empty() {
+        html.push_str("<h2>Real demonstrations</h2>\n<p>The slide template learned from each real demonstration; boundary errors are the distance from each of the authors' label boundaries to the nearest boundary found.</p>\n");
+        let _ = writeln!(html, "<pre>{}</pre>", escape(&real_table(real)));
+    }
     let _ = writeln!(html, "<h2>Terminal table</h2>\n<pre>{}</pre>\n</body></html>", escape(table));
     let index = out.join("index.html");
     atomic::write(&index, html.as_bytes())?;
     Ok(index)
+}
+
+/// The real-demonstration results as text.
+pub(super) fn real_table(results: &[RealResult]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "real demonstrations (slide template):");
+    for r in results {
+        if let Some(why) = &r.skipped {
+            let _ = writeln!(out, "  {:<14} {why}", r.file);
+            continue;
+        }
+        let errors: Vec<String> = r.boundary_errors_s.iter().map(|e| format!("{e:.2}")).collect();
+        let found: Vec<String> = r.found_boundaries_s.iter().map(|e| format!("{e:.2}")).collect();
+        let labels: Vec<String> = r.label_boundaries_s.iter().map(|e| format!("{e:.2}")).collect();
+        let _ = writeln!(
+            out,
+            "  {:<14} boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; reproduction: {} (force RMS {}%, contact {}%)",
+            r.file,
+            found.join(", "),
+            labels.join(", "),
+            errors.join(", "),
+            number(r.force_n),
+            r.reproduction.as_deref().unwrap_or("-"),
+            percent(r.force_rms_rel),
+            percent(r.contact_share)
+        );
+    }
+    out
 }

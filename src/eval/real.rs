@@ -1,0 +1,174 @@
+//! `skillc eval --real DIR`: learn a slide skill from each usable real demonstration in a folder
+//! shaped like the LASA wiping data (`*.csv` with the SPEC columns, optional
+//! `segment_labels.csv`), compare the segmentation with the authors' labels, and reproduce
+//! each on a table whose top is the learned plane.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use serde::Serialize;
+use skill_runtime::demo::{read_csv, ReadOptions};
+use skill_runtime::exec::{bind, simulate, ExecOptions, Mode};
+use skill_runtime::skill::{learn_skill, LearnOptions, LearnedForce, LearnedFrame};
+
+use super::metrics::{measure, ContactPlan};
+use crate::learn_cmd::error_chain;
+
+/// What happened with one real demonstration.
+#[derive(Debug, Clone, Serialize)]
+pub struct RealResult {
+    /// The file.
+    pub file: String,
+    /// Samples.
+    pub samples: usize,
+    /// Why it was skipped or failed, if it was.
+    pub skipped: Option<String>,
+    /// Boundaries found [s].
+    pub found_boundaries_s: Vec<f64>,
+    /// Boundaries of the authors' labels [s], if a labels file lists the demonstration.
+    pub label_boundaries_s: Vec<f64>,
+    /// Per label boundary, the distance to the nearest found boundary [s].
+    pub boundary_errors_s: Vec<f64>,
+    /// The learned constant force [N].
+    pub force_n: Option<f64>,
+    /// The learned plane's normal (into the surface), base frame.
+    pub plane_z: Option<[f64; 3]>,
+    /// The reproduction on a table at the learned plane.
+    pub reproduction: Option<String>,
+    /// Its force RMS over the learned force, during contact.
+    pub force_rms_rel: Option<f64>,
+    /// Its share of the contact phase in contact.
+    pub contact_share: Option<f64>,
+}
+
+/// A demonstration whose force does not change between most consecutive samples: the sensor
+/// was not streaming.
+fn frozen(force: &[Vector3<f64>]) -> bool {
+    let unchanged = force.windows(2).filter(|w| (w[1] - w[0]).norm() < 1e-9).count();
+    force.len() > 2 && unchanged * 2 > force.len()
+}
+
+fn label_boundaries(dir: &Path, file: &str) -> Option<Vec<usize>> {
+    let text = std::fs::read_to_string(dir.join("segment_labels.csv")).ok()?;
+    let mut starts: Vec<usize> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("file,"))
+        .filter_map(|line| {
+            let fields: Vec<&str> = line.split(',').collect();
+            (fields.len() == 4 && fields[0].trim() == file).then(|| fields[1].trim().parse::<usize>().ok()).flatten()
+        })
+        .collect();
+    starts.sort_unstable();
+    (!starts.is_empty()).then(|| starts.into_iter().skip(1).map(|s| s - 1).collect())
+}
+
+/// Evaluates every demonstration in `dir` with the slide template `skill`.
+pub fn evaluate(dir: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> Result<Vec<RealResult>, String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|err| format!("cannot read `{}`: {err}", dir.display()))?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .filter(|p| !matches!(p.file_name().and_then(|n| n.to_str()), Some("segment_labels.csv" | "index.csv")))
+        .collect();
+    files.sort();
+    use rayon::prelude::*;
+    Ok(files.par_iter().map(|path| one(dir, path, skill, table_scene)).collect())
+}
+
+fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> RealResult {
+    let file = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut result = RealResult {
+        file: file.clone(),
+        samples: 0,
+        skipped: None,
+        found_boundaries_s: Vec::new(),
+        label_boundaries_s: Vec::new(),
+        boundary_errors_s: Vec::new(),
+        force_n: None,
+        plane_z: None,
+        reproduction: None,
+        force_rms_rel: None,
+        contact_share: None,
+    };
+    let loaded = match read_csv(path, &ReadOptions { min_samples: 30 }) {
+        Ok(loaded) => loaded,
+        Err(err) => {
+            result.skipped = Some(error_chain(&err));
+            return result;
+        }
+    };
+    let demo = loaded.demo;
+    result.samples = demo.len();
+    if frozen(&demo.force_n) {
+        result.skipped = Some("the force signal is frozen (the sensor did not stream): skipped".to_string());
+        return result;
+    }
+    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    let learned = match learn_skill(skill, &demo, &warnings, &LearnOptions::default()) {
+        Ok(learned) => learned,
+        Err(err) => {
+            result.skipped = Some(error_chain(&err));
+            return result;
+        }
+    };
+    let t0 = demo.t_s[0];
+    result.found_boundaries_s = learned.segments.iter().skip(1).map(|s| s.start_s - t0).collect();
+    if let Some(labels) = label_boundaries(dir, &file) {
+        result.label_boundaries_s = labels.iter().filter_map(|&k| demo.t_s.get(k)).map(|t| t - t0).collect();
+        result.boundary_errors_s = result
+            .label_boundaries_s
+            .iter()
+            .map(|l| result.found_boundaries_s.iter().map(|f| (f - l).abs()).fold(f64::INFINITY, f64::min))
+            .collect();
+    }
+    result.force_n = learned.forces.values().find_map(|f| match f {
+        LearnedForce::Constant { value_n, .. } => Some(*value_n),
+        _ => None,
+    });
+    let Some(LearnedFrame::Constant(plane)) = learned.frames.values().next() else {
+        result.reproduction = Some("no constant plane learned".to_string());
+        return result;
+    };
+    let plane = plane.isometry();
+    let z = plane.rotation * Vector3::z();
+    result.plane_z = Some([z.x, z.y, z.z]);
+
+    // A table whose top is the learned plane, moved along the normal by the probe's length
+    // (demonstrations record the flange; the probe tip touches the surface).
+    let tool_offset = 0.11 + skill_runtime::demogen::TIP_RADIUS_M;
+    let thickness = 0.05;
+    let centre = plane.translation.vector + z * (tool_offset + thickness / 2.0);
+    let top_down = UnitQuaternion::from_rotation_matrix(&Rotation3::face_towards(&z, &Vector3::x()));
+    let (roll, pitch, yaw) = (top_down * UnitQuaternion::from_euler_angles(0.0, std::f64::consts::PI, 0.0)).euler_angles();
+    let sets = vec![
+        format!("table.xyz=[{}, {}, {}]", centre.x, centre.y, centre.z),
+        format!("table.rpy=[{roll}, {pitch}, {yaw}]"),
+        "table.size=[0.8, 0.8, 0.05]".to_string(),
+    ];
+    let scene = match crate::run_cmd::load_scene(table_scene, &sets) {
+        Ok(scene) => scene,
+        Err(crate::learn_cmd::Failure::Input(m) | crate::learn_cmd::Failure::Usage(m)) => {
+            result.reproduction = Some(format!("cannot build the table scene: {m}"));
+            return result;
+        }
+    };
+    let bound = match bind(skill, &learned) {
+        Ok(bound) => bound,
+        Err(err) => {
+            result.reproduction = Some(err.to_string());
+            return result;
+        }
+    };
+    match simulate(&scene, Mode::Skill(&bound), &ExecOptions::default()) {
+        Ok((report, log)) => {
+            let plan = ContactPlan::of(skill, &learned);
+            let metrics = measure(&log, &plan, false, &|_| z);
+            result.force_rms_rel = metrics.force_rms_rel;
+            result.contact_share = metrics.contact_share;
+            result.reproduction = Some(format!("{:?}: {}", report.outcome, report.message));
+        }
+        Err(err) => result.reproduction = Some(error_chain(&err)),
+    }
+    result
+}

@@ -854,6 +854,42 @@ impl<'a> Checker<'a> {
         }
     }
 
+    /// A required segment argument: resolved, or reported missing with an example.
+    fn required_segment(
+        &mut self,
+        expr: Option<&&ast::Expr>,
+        function: &str,
+        span: Span,
+        example: &str,
+        scope: &mut SkillScope,
+    ) -> Option<ir::SegmentIdx> {
+        match expr {
+            Some(expr) => self.segment(expr, scope),
+            None => {
+                self.missing_arg(function, "segment", span, example);
+                None
+            }
+        }
+    }
+
+    /// A required point argument: resolved, or reported missing with an example.
+    fn required_point(
+        &mut self,
+        expr: Option<&&ast::Expr>,
+        function: &str,
+        span: Span,
+        example: &str,
+        scope: &mut SkillScope,
+    ) -> Option<ir::Point> {
+        match expr {
+            Some(expr) => self.point(expr, scope),
+            None => {
+                self.missing_arg(function, "point", span, example);
+                None
+            }
+        }
+    }
+
     fn point(&mut self, expr: &ast::Expr, scope: &mut SkillScope) -> Option<ir::Point> {
         match &expr.kind {
             ExprKind::Name(name) if name.name == "peak_force" => return Some(ir::Point::PeakForce),
@@ -1058,13 +1094,7 @@ impl<'a> Checker<'a> {
         match name.name.as_str() {
             "constraint" => {
                 let bound = self.bind_args("constraint", args, &["segment", "models"], 1);
-                let segment = match bound.get("segment") {
-                    Some(segment) => self.segment(segment, scope),
-                    None => {
-                        self.missing_arg("constraint", "segment", expr.span, "constraint(segment 2)");
-                        None
-                    }
-                };
+                let segment = self.required_segment(bound.get("segment"), "constraint", expr.span, "constraint(segment 2)", scope);
                 let candidates = match bound.get("models") {
                     None => vec![
                         ir::ConstraintModel::FixedPoint,
@@ -1182,13 +1212,7 @@ impl<'a> Checker<'a> {
         match &expr.kind {
             ExprKind::Call { name, args } if name.name == "dmp" => {
                 let bound = self.bind_args("dmp", args, &["segment", "basis"], 1);
-                let segment = match bound.get("segment") {
-                    Some(segment) => self.segment(segment, scope),
-                    None => {
-                        self.missing_arg("dmp", "segment", expr.span, "dmp(segment 1)");
-                        None
-                    }
-                };
+                let segment = self.required_segment(bound.get("segment"), "dmp", expr.span, "dmp(segment 1)", scope);
                 let basis = self.basis(bound.get("basis"), DEFAULT_MOTION_BASIS);
                 Some((segment?, basis?))
             }
@@ -1223,49 +1247,25 @@ impl<'a> Checker<'a> {
             ExprKind::Call { name, args } => match name.name.as_str() {
                 "constant" => {
                     let bound = self.bind_args("constant", args, &["segment", "along"], 1);
-                    let segment = match bound.get("segment") {
-                        Some(segment) => self.segment(segment, scope),
-                        None => {
-                            self.missing_arg("constant", "segment", expr.span, "constant(segment 2, along: surface.z)");
-                            None
-                        }
-                    };
+                    let segment = self.required_segment(bound.get("segment"), "constant", expr.span, "constant(segment 2, along: surface.z)", scope);
                     let along = self.along(bound.get("along"), "constant", expr.span, scope);
                     Some(ir::ForceSource::Constant { segment: segment?, along: along? })
                 }
                 "force_at" => {
                     let bound = self.bind_args("force_at", args, &["point", "along"], 1);
-                    let point = match bound.get("point") {
-                        Some(point) => self.point(point, scope),
-                        None => {
-                            self.missing_arg("force_at", "point", expr.span, "force_at(end(segment 1), along: contact.z)");
-                            None
-                        }
-                    };
+                    let point = self.required_point(bound.get("point"), "force_at", expr.span, "force_at(end(segment 1), along: contact.z)", scope);
                     let along = self.along(bound.get("along"), "force_at", expr.span, scope);
                     Some(ir::ForceSource::At { point: point?, along: along? })
                 }
                 "dmp" => {
                     let bound = self.bind_args("dmp", args, &["segment", "basis"], 1);
-                    let segment = match bound.get("segment") {
-                        Some(segment) => self.segment(segment, scope),
-                        None => {
-                            self.missing_arg("dmp", "segment", expr.span, "dmp(segment 2)");
-                            None
-                        }
-                    };
+                    let segment = self.required_segment(bound.get("segment"), "dmp", expr.span, "dmp(segment 2)", scope);
                     let basis = self.basis(bound.get("basis"), DEFAULT_FORCE_BASIS);
                     Some(ir::ForceSource::Dmp { segment: segment?, basis: basis? })
                 }
                 "magnitude" => {
                     let bound = self.bind_args("magnitude", args, &["segment", "along", "basis"], 1);
-                    let segment = match bound.get("segment") {
-                        Some(segment) => self.segment(segment, scope),
-                        None => {
-                            self.missing_arg("magnitude", "segment", expr.span, "magnitude(segment 2, along: surface.z)");
-                            None
-                        }
-                    };
+                    let segment = self.required_segment(bound.get("segment"), "magnitude", expr.span, "magnitude(segment 2, along: surface.z)", scope);
                     let along = self.along(bound.get("along"), "magnitude", expr.span, scope);
                     let basis = self.basis(bound.get("basis"), DEFAULT_FORCE_BASIS);
                     Some(ir::ForceSource::Magnitude { segment: segment?, along: along?, basis: basis? })
@@ -1317,13 +1317,7 @@ impl<'a> Checker<'a> {
             }
             ExprKind::Call { name, args } if name.name == "force_at" => {
                 let bound = self.bind_args("force_at", args, &["point", "along", "scale"], 1);
-                let point = match bound.get("point") {
-                    Some(point) => self.point(point, scope),
-                    None => {
-                        self.missing_arg("force_at", "point", expr.span, "force_at(end(segment 1), along: contact.z)");
-                        None
-                    }
-                };
+                let point = self.required_point(bound.get("point"), "force_at", expr.span, "force_at(end(segment 1), along: contact.z)", scope);
                 let along = self.along(bound.get("along"), "force_at", expr.span, scope);
                 let scale = match bound.get("scale") {
                     Some(scale) => {

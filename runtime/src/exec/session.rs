@@ -34,17 +34,27 @@ pub enum Mode<'b, 'a> {
 
 /// Builds the scene's simulation and runs `mode` in it.
 pub fn simulate(scene: &Scene, mode: Mode<'_, '_>, options: &ExecOptions) -> Result<(RunReport, RunLog), SessionError> {
+    with_rig(scene, |rig| simulate_on(rig, mode, options))
+}
+
+/// Builds the scene's simulation, the controller (null space pulled to the start
+/// configuration) and the rig, and hands the rig to `run`.
+fn with_rig<T>(scene: &Scene, run: impl FnOnce(&mut Rig<'_>) -> Result<T, SessionError>) -> Result<T, SessionError> {
     let mut plant = RapierPlant::from_scene(scene)?;
     let spec = scene.spec();
     let robot = plant.robot().clone();
     let q0 = plant.observe().q;
     let controller = HybridController::new(robot, &spec.robot.sensor, q0.as_slice(), ControllerGains::default())?;
     let mut rig = Rig::new(&mut plant, controller, &spec.robot.sensor)?;
+    run(&mut rig)
+}
+
+fn simulate_on(rig: &mut Rig<'_>, mode: Mode<'_, '_>, options: &ExecOptions) -> Result<(RunReport, RunLog), SessionError> {
     let mut log = RunLog::default();
     let log_ref = if options.log { Some(&mut log) } else { None };
     let report = match mode {
-        Mode::Skill(bound) => run_skill(bound, &mut rig, options, log_ref)?,
-        Mode::Replay(learned) => run_replay(learned, &mut rig, options, log_ref)?,
+        Mode::Skill(bound) => run_skill(bound, rig, options, log_ref)?,
+        Mode::Replay(learned) => run_replay(learned, rig, options, log_ref)?,
     };
     Ok((report, log))
 }
@@ -80,12 +90,15 @@ pub fn simulate_task(
     fallbacks: &[TaskStep<'_, '_>],
     options: &ExecOptions,
 ) -> Result<(Vec<StepReport>, RunLog, skill_ir::Outcome), SessionError> {
-    let mut plant = RapierPlant::from_scene(scene)?;
-    let spec = scene.spec();
-    let robot = plant.robot().clone();
-    let q0 = plant.observe().q;
-    let controller = HybridController::new(robot, &spec.robot.sensor, q0.as_slice(), ControllerGains::default())?;
-    let mut rig = Rig::new(&mut plant, controller, &spec.robot.sensor)?;
+    with_rig(scene, |rig| task_on(rig, steps, fallbacks, options))
+}
+
+fn task_on(
+    rig: &mut Rig<'_>,
+    steps: &[TaskStep<'_, '_>],
+    fallbacks: &[TaskStep<'_, '_>],
+    options: &ExecOptions,
+) -> Result<(Vec<StepReport>, RunLog, skill_ir::Outcome), SessionError> {
     let mut log = RunLog::default();
     let mut reports = Vec::new();
     let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>, log: &mut RunLog| {
@@ -104,13 +117,13 @@ pub fn simulate_task(
         })
     };
     for (index, task_step) in steps.iter().enumerate() {
-        let report = run_step(task_step, index == 0, false, &mut rig, &mut log)?;
+        let report = run_step(task_step, index == 0, false, rig, &mut log)?;
         let failed = report.report.outcome == skill_ir::Outcome::Failure;
         reports.push(report);
         if failed {
             if let skill_ir::OnFailure::Fallback(fallback) = task_step.step.on_failure {
                 if let Some(fallback) = fallbacks.get(fallback as usize) {
-                    reports.push(run_step(fallback, false, true, &mut rig, &mut log)?);
+                    reports.push(run_step(fallback, false, true, rig, &mut log)?);
                 }
             }
             return Ok((reports, log, skill_ir::Outcome::Failure));

@@ -11,13 +11,19 @@ fn slide_closed_loop(c: &mut Criterion) {
     let Ok((_, skill)) = skillc::learn_cmd::load_skill(&root.join("stdlib-skills/slide.skill"), None) else {
         panic!("slide compiles")
     };
-    let Ok(learned) = skillc::learn_cmd::learn_from_files(&skill, &root.join("examples/demos/slide.csv"), &LearnOptions::default())
+    let Ok(learned) =
+        skillc::learn_cmd::learn_from_files(&skill, &root.join("examples/demos/slide.csv"), &LearnOptions::default())
     else {
         panic!("slide learns")
     };
-    let Ok(scene) = skillc::run_cmd::load_scene(&root.join("examples/scenes/table.toml"), &[]) else { panic!("scene") };
+    let Ok(scene) = skillc::run_cmd::load_scene(&root.join("examples/scenes/table.toml"), &[]) else {
+        panic!("scene")
+    };
     let bound = bind(&skill, &learned).expect("binds");
-    let options = ExecOptions { log: false, ..ExecOptions::default() };
+    let options = ExecOptions {
+        log: false,
+        ..ExecOptions::default()
+    };
     let (report, _) = simulate(&scene, Mode::Skill(&bound), &options).expect("runs");
     let steps = (report.duration_s / options.dt_s).round() as u64;
     let mut group = c.benchmark_group("closed loop");

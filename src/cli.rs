@@ -161,7 +161,11 @@ pub enum Stage {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> ExitCode {
     let code = match cli.command {
-        Command::Check { files, format, deny_warnings } => check(&files, format, deny_warnings),
+        Command::Check {
+            files,
+            format,
+            deny_warnings,
+        } => check(&files, format, deny_warnings),
         Command::Compile { file, output } => compile(&file, output.as_deref()),
         Command::Graph { file, format, output } => graph(&file, format, output.as_deref()),
         Command::Fmt { files, check } => fmt(&files, check),
@@ -185,7 +189,10 @@ fn usage_error(message: impl std::fmt::Display) -> u8 {
 }
 
 fn terminal_width() -> usize {
-    std::env::var("COLUMNS").ok().and_then(|c| c.parse().ok()).unwrap_or(100)
+    std::env::var("COLUMNS")
+        .ok()
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(100)
 }
 
 /// Prints the diagnostics of a compilation to standard error.
@@ -251,7 +258,11 @@ fn compile_or_report(path: &Path) -> Result<skill_compiler::Compilation, u8> {
     print_diags(&compilation);
     if compilation.program.is_none() {
         let (errors, _) = render::counts(&compilation.diags);
-        eprintln!("error: `{}` has {errors} error{}; nothing written", path.display(), if errors == 1 { "" } else { "s" });
+        eprintln!(
+            "error: `{}` has {errors} error{}; nothing written",
+            path.display(),
+            if errors == 1 { "" } else { "s" }
+        );
         return Err(1);
     }
     Ok(compilation)
@@ -279,7 +290,10 @@ fn compile(path: &Path, output: Option<&Path>) -> u8 {
         Ok(compilation) => compilation,
         Err(code) => return code,
     };
-    let program = compilation.program.as_ref().expect("compile_or_report returns programs");
+    let program = compilation
+        .program
+        .as_ref()
+        .expect("compile_or_report returns programs");
     match serde_json::to_string_pretty(program) {
         Ok(mut json) => {
             json.push('\n');
@@ -294,7 +308,10 @@ fn graph(path: &Path, format: GraphKind, output: Option<&Path>) -> u8 {
         Ok(compilation) => compilation,
         Err(code) => return code,
     };
-    let program = compilation.program.as_ref().expect("compile_or_report returns programs");
+    let program = compilation
+        .program
+        .as_ref()
+        .expect("compile_or_report returns programs");
     let format = match format {
         GraphKind::Dot => GraphFormat::Dot,
         GraphKind::Mermaid => GraphFormat::Mermaid,
@@ -318,7 +335,12 @@ fn fmt(files: &[PathBuf], check_only: bool) -> u8 {
             Ok(source) => source,
             Err(invalid) => {
                 let (source, diag) = *invalid;
-                let compilation = skill_compiler::Compilation { files: vec![source], diags: vec![diag], ast: Default::default(), program: None };
+                let compilation = skill_compiler::Compilation {
+                    files: vec![source],
+                    diags: vec![diag],
+                    ast: Default::default(),
+                    program: None,
+                };
                 print_diags(&compilation);
                 status = status.max(1);
                 continue;
@@ -326,7 +348,12 @@ fn fmt(files: &[PathBuf], check_only: bool) -> u8 {
         };
         let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
         if !diags.is_empty() {
-            let compilation = skill_compiler::Compilation { files: vec![source], diags, ast, program: None };
+            let compilation = skill_compiler::Compilation {
+                files: vec![source],
+                diags,
+                ast,
+                program: None,
+            };
             print_diags(&compilation);
             eprintln!("error: `{name}` does not parse; not formatted");
             status = status.max(1);

@@ -41,17 +41,29 @@ pub fn decode(name: &str, bytes: Vec<u8>) -> Result<SourceFile, Box<(SourceFile,
 /// Compiles a `.skill` file from disk, reading its imports relative to it.
 pub fn compile_path(path: &Path) -> Result<Compilation, ReadError> {
     let name = path.to_string_lossy().replace('\\', "/");
-    let bytes = std::fs::read(path).map_err(|source| ReadError::Io { path: name.clone(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
+        path: name.clone(),
+        source,
+    })?;
     let root = match decode(&name, bytes) {
         Ok(root) => root,
         Err(invalid) => {
             let (source, diag) = *invalid;
-            return Ok(Compilation { files: vec![source], diags: vec![diag], ast: Default::default(), program: None })
+            return Ok(Compilation {
+                files: vec![source],
+                diags: vec![diag],
+                ast: Default::default(),
+                program: None,
+            });
         }
     };
     let mut load = |import: &str| -> Result<String, LoadError> {
-        let bytes = std::fs::read(import).map_err(|err| LoadError { reason: err.to_string().to_lowercase() })?;
-        String::from_utf8(bytes).map_err(|_| LoadError { reason: "not valid UTF-8 text".to_string() })
+        let bytes = std::fs::read(import).map_err(|err| LoadError {
+            reason: err.to_string().to_lowercase(),
+        })?;
+        String::from_utf8(bytes).map_err(|_| LoadError {
+            reason: "not valid UTF-8 text".to_string(),
+        })
     };
     Ok(skill_compiler::compile(root, &mut load))
 }

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use skill_runtime::demo::{read_csv, ReadOptions};
-use skill_runtime::skill::{learn_skill, Learned, LearnedForce, LearnedFrame, LearnOptions};
+use skill_runtime::skill::{learn_skill, LearnOptions, Learned, LearnedForce, LearnedFrame};
 
 use crate::{atomic, frontend, render};
 
@@ -67,12 +67,20 @@ pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program,
         for diag in &compilation.diags {
             text.push_str(&render::plain(diag, &compilation));
         }
-        return Err(Failure::Input(format!("`{}` does not compile:\n{}", path.display(), text.trim_end())));
+        return Err(Failure::Input(format!(
+            "`{}` does not compile:\n{}",
+            path.display(),
+            text.trim_end()
+        )));
     };
     let skill = match name {
         Some(name) => program.skill(name).cloned().ok_or_else(|| {
             let names: Vec<&str> = program.skills.iter().map(|s| s.name.as_str()).collect();
-            Failure::Usage(format!("`{}` has no skill `{name}`; it has {}", path.display(), names.join(", ")))
+            Failure::Usage(format!(
+                "`{}` has no skill `{name}`; it has {}",
+                path.display(),
+                names.join(", ")
+            ))
         })?,
         None => match program.skills.as_slice() {
             [only] => only.clone(),
@@ -92,11 +100,7 @@ pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program,
 }
 
 /// Learns a skill from a demonstration file; the library form of `skillc learn`.
-pub fn learn_from_files(
-    skill: &skill_ir::Skill,
-    demo_path: &Path,
-    options: &LearnOptions,
-) -> Result<Learned, Failure> {
+pub fn learn_from_files(skill: &skill_ir::Skill, demo_path: &Path, options: &LearnOptions) -> Result<Learned, Failure> {
     let min_samples = (skill.learn.segments as usize * 5).max(10);
     let loaded = read_csv(demo_path, &ReadOptions { min_samples }).map_err(|err| Failure::Input(error_chain(&err)))?;
     let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
@@ -127,7 +131,10 @@ pub fn run(args: &LearnArgs) -> u8 {
 
 fn learn(args: &LearnArgs) -> Result<String, Failure> {
     let (_, skill) = load_skill(&args.skill_file, args.skill.as_deref())?;
-    let options = LearnOptions { lowpass_hz: args.lowpass, resample_hz: args.resample };
+    let options = LearnOptions {
+        lowpass_hz: args.lowpass,
+        resample_hz: args.resample,
+    };
     let learned = learn_from_files(&skill, &args.demo, &options)?;
     let json = serde_json::to_string_pretty(&learned).map_err(|err| Failure::Usage(err.to_string()))? + "\n";
     atomic::write(&args.output, json.as_bytes())
@@ -135,7 +142,8 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
     let mut out = summary(&learned);
     let _ = writeln!(out, "wrote `{}`", args.output.display());
     if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir).map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
         let view = crate::eval::SkillView {
             name: &learned.skill,
             learned: Some(&learned),
@@ -146,7 +154,8 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
         };
         for kind in ["trajectory", "learned_force"] {
             let path = dir.join(format!("{}_{kind}.svg", learned.skill));
-            crate::eval::plot::draw(kind, &path, &view, &[]).map_err(|err| Failure::Usage(format!("cannot plot `{kind}`: {err}")))?;
+            crate::eval::plot::draw(kind, &path, &view, &[])
+                .map_err(|err| Failure::Usage(format!("cannot plot `{kind}`: {err}")))?;
             let _ = writeln!(out, "wrote `{}`", path.display());
         }
     }
@@ -190,7 +199,13 @@ pub fn summary(learned: &Learned) -> String {
             .constraints
             .get(name)
             .and_then(|fits| fits.iter().find(|f| f.chosen))
-            .map(|fit| format!(", residual {:.2} mm / {:.2}°", fit.residual_m * 1e3, fit.residual_rad.to_degrees()))
+            .map(|fit| {
+                format!(
+                    ", residual {:.2} mm / {:.2}°",
+                    fit.residual_m * 1e3,
+                    fit.residual_rad.to_degrees()
+                )
+            })
             .unwrap_or_default();
         let _ = writeln!(
             out,
@@ -224,8 +239,15 @@ pub fn summary(learned: &Learned) -> String {
     }
     for (name, force) in &learned.forces {
         let text = match force {
-            LearnedForce::Constant { value_n, std_n, region_s } => {
-                format!("constant {value_n:.2} N (σ {std_n:.2} N over {:.2}..{:.2} s)", region_s[0], region_s[1])
+            LearnedForce::Constant {
+                value_n,
+                std_n,
+                region_s,
+            } => {
+                format!(
+                    "constant {value_n:.2} N (σ {std_n:.2} N over {:.2}..{:.2} s)",
+                    region_s[0], region_s[1]
+                )
             }
             LearnedForce::At { value_n } => format!("at a point {value_n:.2} N"),
             LearnedForce::Literal { value_n } => format!("literal {value_n:.2} N"),

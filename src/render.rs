@@ -5,8 +5,14 @@ use skill_compiler::{Compilation, Diag, Severity};
 
 /// Renders one diagnostic as text; `color` picks a coloured unicode theme.
 pub fn human(diag: &Diag, compilation: &Compilation, color: bool, width: usize) -> String {
-    let theme = if color { GraphicalTheme::unicode() } else { GraphicalTheme::unicode_nocolor() };
-    let handler = GraphicalReportHandler::new_themed(theme).with_width(width).with_links(false);
+    let theme = if color {
+        GraphicalTheme::unicode()
+    } else {
+        GraphicalTheme::unicode_nocolor()
+    };
+    let handler = GraphicalReportHandler::new_themed(theme)
+        .with_width(width)
+        .with_links(false);
     let mut out = String::new();
     let source = &compilation.files[diag.file];
     if handler.render_report(&mut out, &diag.with_source(source)).is_err() {
@@ -20,7 +26,13 @@ pub fn human(diag: &Diag, compilation: &Compilation, color: bool, width: usize) 
 pub fn plain(diag: &Diag, compilation: &Compilation) -> String {
     let source = &compilation.files[diag.file];
     let (line, column) = source.line_col(diag.span().start);
-    format!("{}:{line}:{column}: {}[{}]: {}\n", source.name, diag.severity().as_str(), diag.code, diag.message)
+    format!(
+        "{}:{line}:{column}: {}[{}]: {}\n",
+        source.name,
+        diag.severity().as_str(),
+        diag.code,
+        diag.message
+    )
 }
 
 /// The JSON object for one diagnostic, for editors and CI.
@@ -54,5 +66,10 @@ pub fn counts(diags: &[Diag]) -> (usize, usize) {
 
 /// Every diagnostic of a compilation rendered without colour at a fixed width (for snapshots).
 pub fn all_plain(compilation: &Compilation, width: usize) -> String {
-    compilation.diags.iter().map(|diag| human(diag, compilation, false, width)).collect::<Vec<_>>().join("\n")
+    compilation
+        .diags
+        .iter()
+        .map(|diag| human(diag, compilation, false, width))
+        .collect::<Vec<_>>()
+        .join("\n")
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog, RunReport};
 use skill_runtime::sim::Scene;
-use skill_runtime::skill::{Learned, LearnOptions};
+use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::atomic;
 use crate::learn_cmd::{error_chain, learn_from_files, load_skill, Failure};
@@ -52,9 +52,13 @@ pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
     let mut scene = Scene::from_file(path).map_err(|err| Failure::Input(error_chain(&err)))?;
     for set in sets {
         let Some((key, value)) = set.split_once('=') else {
-            return Err(Failure::Usage(format!("`--set {set}` must look like KEY=VALUE, e.g. table.z=0.195")));
+            return Err(Failure::Usage(format!(
+                "`--set {set}` must look like KEY=VALUE, e.g. table.z=0.195"
+            )));
         };
-        scene.set(key.trim(), value.trim()).map_err(|err| Failure::Input(error_chain(&err)))?;
+        scene
+            .set(key.trim(), value.trim())
+            .map_err(|err| Failure::Input(error_chain(&err)))?;
     }
     Ok(scene)
 }
@@ -64,7 +68,12 @@ pub fn read_learned(path: &Path) -> Result<Learned, Failure> {
     let text = std::fs::read_to_string(path)
         .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
     serde_json::from_str(&text).map_err(|err| {
-        Failure::Input(format!("`{}` is not a learned file: {err} (line {}, column {})", path.display(), err.line(), err.column()))
+        Failure::Input(format!(
+            "`{}` is not a learned file: {err} (line {}, column {})",
+            path.display(),
+            err.line(),
+            err.column()
+        ))
     })
 }
 
@@ -90,9 +99,11 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         let compilation = crate::frontend::compile_path(&args.file).map_err(|err| Failure::Usage(err.to_string()))?;
         if let Some(program) = &compilation.program {
             let task = match &args.task {
-                Some(name) => Some(program.task(name).ok_or_else(|| {
-                    Failure::Usage(format!("`{}` has no task `{name}`", args.file.display()))
-                })?),
+                Some(name) => Some(
+                    program
+                        .task(name)
+                        .ok_or_else(|| Failure::Usage(format!("`{}` has no task `{name}`", args.file.display())))?,
+                ),
                 None => program.tasks.first(),
             };
             if let Some(task) = task {
@@ -105,16 +116,26 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         (Some(path), _) => read_learned(path)?,
         (None, Some(demo)) => learn_from_files(&skill, demo, &LearnOptions::default())?,
         (None, None) => {
-            return Err(Failure::Usage("give the learned file (--learned L.json) or a demonstration (--demo D.csv)".into()))
+            return Err(Failure::Usage(
+                "give the learned file (--learned L.json) or a demonstration (--demo D.csv)".into(),
+            ))
         }
     };
     let scene = load_scene(&args.scene, &args.sets)?;
     let options = ExecOptions {
-        overrides: skill_ir::Overrides { force_scale: args.force_scale, speed_factor: args.speed, goal_offset_m: [0.0; 3] },
+        overrides: skill_ir::Overrides {
+            force_scale: args.force_scale,
+            speed_factor: args.speed,
+            goal_offset_m: [0.0; 3],
+        },
         ..ExecOptions::default()
     };
     let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
-    let mode = if args.replay { Mode::Replay(&learned) } else { Mode::Skill(&bound) };
+    let mode = if args.replay {
+        Mode::Replay(&learned)
+    } else {
+        Mode::Skill(&bound)
+    };
     let (report, log) = simulate(&scene, mode, &options).map_err(|err| Failure::Input(error_chain(&err)))?;
     if let Some(path) = &args.output {
         atomic::write(path, log.to_csv().as_bytes())
@@ -171,9 +192,18 @@ pub fn state_stats(log: &RunLog) -> Vec<StateStats> {
 /// The human summary of a run.
 pub fn summary(skill: &str, replay: bool, report: &RunReport, log: &RunLog) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "{} `{skill}`: {:.2} s simulated", if replay { "replay of" } else { "skill" }, report.duration_s);
+    let _ = writeln!(
+        out,
+        "{} `{skill}`: {:.2} s simulated",
+        if replay { "replay of" } else { "skill" },
+        report.duration_s
+    );
     let stats = state_stats(log);
-    let _ = writeln!(out, "  {:<18} {:>8} {:>8}   {:>8} {:>8} {:>9}", "state", "enter s", "exit s", "F̄z N", "max Fz N", "Fz err N");
+    let _ = writeln!(
+        out,
+        "  {:<18} {:>8} {:>8}   {:>8} {:>8} {:>9}",
+        "state", "enter s", "exit s", "F̄z N", "max Fz N", "Fz err N"
+    );
     for visit in &report.visits {
         let index = log.states.iter().position(|s| *s == visit.state);
         let stat = index.and_then(|i| stats.get(i)).cloned().unwrap_or_default();
@@ -227,17 +257,27 @@ fn bind_all<'b, 'a>(
         .collect()
 }
 
-fn run_task(args: &RunArgs, program: &skill_ir::Program, task: &skill_ir::Task) -> Result<(RunReport, String), Failure> {
+fn run_task(
+    args: &RunArgs,
+    program: &skill_ir::Program,
+    task: &skill_ir::Task,
+) -> Result<(RunReport, String), Failure> {
     use skill_runtime::exec::simulate_task;
     let scene = load_scene(&args.scene, &args.sets)?;
-    let prepared: Vec<(skill_ir::Skill, Learned)> =
-        task.steps.iter().map(|step| step_learned(program, step)).collect::<Result<_, _>>()?;
-    let prepared_fallbacks: Vec<(skill_ir::Skill, Learned)> =
-        task.fallbacks.iter().map(|step| step_learned(program, step)).collect::<Result<_, _>>()?;
+    let prepared: Vec<(skill_ir::Skill, Learned)> = task
+        .steps
+        .iter()
+        .map(|step| step_learned(program, step))
+        .collect::<Result<_, _>>()?;
+    let prepared_fallbacks: Vec<(skill_ir::Skill, Learned)> = task
+        .fallbacks
+        .iter()
+        .map(|step| step_learned(program, step))
+        .collect::<Result<_, _>>()?;
     let steps = bind_all(&task.steps, &prepared)?;
     let fallbacks = bind_all(&task.fallbacks, &prepared_fallbacks)?;
-    let (reports, log, outcome) =
-        simulate_task(&scene, &steps, &fallbacks, &ExecOptions::default()).map_err(|err| Failure::Input(error_chain(&err)))?;
+    let (reports, log, outcome) = simulate_task(&scene, &steps, &fallbacks, &ExecOptions::default())
+        .map_err(|err| Failure::Input(error_chain(&err)))?;
     if let Some(path) = &args.output {
         atomic::write(path, log.to_csv().as_bytes())
             .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
@@ -256,8 +296,19 @@ fn run_task(args: &RunArgs, program: &skill_ir::Program, task: &skill_ir::Task) 
                 step_log.ticks.push(tick);
             }
         }
-        let title = format!("{}step `{}` ({})", if step.fallback { "fallback " } else { "" }, step.step, step.skill);
-        let _ = write!(text, "{}", summary(&title, false, &step.report, &step_log).replacen("skill `", "", 1).replacen(&format!("{}`", title), &title, 1));
+        let title = format!(
+            "{}step `{}` ({})",
+            if step.fallback { "fallback " } else { "" },
+            step.step,
+            step.skill
+        );
+        let _ = write!(
+            text,
+            "{}",
+            summary(&title, false, &step.report, &step_log)
+                .replacen("skill `", "", 1)
+                .replacen(&format!("{}`", title), &title, 1)
+        );
     }
     let status = match outcome {
         skill_ir::Outcome::Success => "task succeeded",

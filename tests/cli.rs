@@ -20,7 +20,13 @@ fn temp_dir(name: &str) -> PathBuf {
 
 #[test]
 fn check_exits_zero_on_the_standard_library() {
-    let out = skillc(&["check", "stdlib-skills/touch.skill", "stdlib-skills/press.skill", "stdlib-skills/slide.skill", "stdlib-skills/contour.skill"]);
+    let out = skillc(&[
+        "check",
+        "stdlib-skills/touch.skill",
+        "stdlib-skills/press.skill",
+        "stdlib-skills/slide.skill",
+        "stdlib-skills/contour.skill",
+    ]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no problems"));
 }
@@ -36,7 +42,10 @@ fn check_exits_one_on_errors_and_two_on_a_missing_file() {
 
     let out = skillc(&["check", "no/such/file.skill"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/file.skill"), "the missing file is named");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no/such/file.skill"),
+        "the missing file is named"
+    );
 }
 
 #[test]
@@ -51,11 +60,23 @@ fn check_json_prints_one_object_per_diagnostic() {
     let out = skillc(&["check", "--format", "json", "tests/corpus/err/many_problems.skill"]);
     assert_eq!(out.status.code(), Some(1));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let objects: Vec<serde_json::Value> =
-        stdout.lines().map(|line| serde_json::from_str(line).expect("each line is JSON")).collect();
+    let objects: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|line| serde_json::from_str(line).expect("each line is JSON"))
+        .collect();
     assert!(objects.len() >= 8);
     for object in &objects {
-        for key in ["file", "line", "column", "end_line", "end_column", "severity", "code", "message", "help"] {
+        for key in [
+            "file",
+            "line",
+            "column",
+            "end_line",
+            "end_column",
+            "severity",
+            "code",
+            "message",
+            "help",
+        ] {
             assert!(object.get(key).is_some(), "missing `{key}` in {object}");
         }
         assert_eq!(object["file"], "tests/corpus/err/many_problems.skill");
@@ -69,13 +90,23 @@ fn check_json_prints_one_object_per_diagnostic() {
 fn compile_writes_the_ir_or_nothing() {
     let dir = temp_dir("compile");
     let good = dir.join("press.ir.json");
-    let out = skillc(&["compile", "stdlib-skills/press.skill", "-o", good.to_str().expect("utf8 path")]);
+    let out = skillc(&[
+        "compile",
+        "stdlib-skills/press.skill",
+        "-o",
+        good.to_str().expect("utf8 path"),
+    ]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let ir: skill_ir::Program = serde_json::from_slice(&std::fs::read(&good).expect("written")).expect("valid IR");
     assert_eq!(ir.skills[0].name, "press");
 
     let bad = dir.join("bad.ir.json");
-    let out = skillc(&["compile", "tests/corpus/err/dead_end.skill", "-o", bad.to_str().expect("utf8 path")]);
+    let out = skillc(&[
+        "compile",
+        "tests/corpus/err/dead_end.skill",
+        "-o",
+        bad.to_str().expect("utf8 path"),
+    ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(!bad.exists(), "nothing is written when the file has errors");
     assert!(String::from_utf8_lossy(&out.stderr).contains("nothing written"));
@@ -88,11 +119,17 @@ fn graph_draws_guards_on_edges() {
     assert_eq!(out.status.code(), Some(0));
     let dot = String::from_utf8_lossy(&out.stdout);
     assert!(dot.starts_with("digraph"));
-    assert!(dot.contains("\"touch.approach\" -> \"touch.settle\" [label=\"force(contact.z) >= touch\"]"), "{dot}");
+    assert!(
+        dot.contains("\"touch.approach\" -> \"touch.settle\" [label=\"force(contact.z) >= touch\"]"),
+        "{dot}"
+    );
     let out = skillc(&["graph", "--format", "mermaid", "stdlib-skills/press.skill"]);
     let mermaid = String::from_utf8_lossy(&out.stdout);
     assert!(mermaid.starts_with("stateDiagram-v2"));
-    assert!(mermaid.contains("press__press --> press__retract : motion_done"), "{mermaid}");
+    assert!(
+        mermaid.contains("press__press --> press__retract : motion_done"),
+        "{mermaid}"
+    );
 }
 
 #[test]
@@ -105,18 +142,33 @@ fn fmt_rewrites_in_place_and_check_only_reports() {
 
     let out = skillc(&["fmt", "--check", path]);
     assert_eq!(out.status.code(), Some(1));
-    assert_eq!(std::fs::read_to_string(&file).expect("read"), messy, "--check changes nothing");
+    assert_eq!(
+        std::fs::read_to_string(&file).expect("read"),
+        messy,
+        "--check changes nothing"
+    );
 
     let out = skillc(&["fmt", path]);
     assert_eq!(out.status.code(), Some(0));
     let formatted = std::fs::read_to_string(&file).expect("read");
-    assert!(formatted.contains("    state a {\n        move p from current\n"), "{formatted}");
-    assert_eq!(skillc(&["fmt", "--check", path]).status.code(), Some(0), "formatted files pass --check");
+    assert!(
+        formatted.contains("    state a {\n        move p from current\n"),
+        "{formatted}"
+    );
+    assert_eq!(
+        skillc(&["fmt", "--check", path]).status.code(),
+        Some(0),
+        "formatted files pass --check"
+    );
 
     std::fs::write(&file, "skill {").expect("write");
     let out = skillc(&["fmt", path]);
     assert_eq!(out.status.code(), Some(1));
-    assert_eq!(std::fs::read_to_string(&file).expect("read"), "skill {", "files that do not parse are left alone");
+    assert_eq!(
+        std::fs::read_to_string(&file).expect("read"),
+        "skill {",
+        "files that do not parse are left alone"
+    );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
@@ -135,19 +187,41 @@ fn stdlib_files_are_formatted() {
 
 #[test]
 fn robot_json_has_exactly_the_documented_keys() {
-    let out = skillc(&["robot", "examples/robots/lwr4.urdf", "--tool", "probe_tip", "--q", "0,-0.5,0,1.5,0,-1.14,0", "--json"]);
+    let out = skillc(&[
+        "robot",
+        "examples/robots/lwr4.urdf",
+        "--tool",
+        "probe_tip",
+        "--q",
+        "0,-0.5,0,1.5,0,-1.14,0",
+        "--json",
+    ]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let value: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     let mut keys: Vec<&str> = value.as_object().expect("object").keys().map(String::as_str).collect();
     keys.sort_unstable();
     assert_eq!(
         keys,
-        ["dof", "gravity_torque", "jacobian", "joints", "q", "robot", "tool_link", "tool_position", "tool_quaternion_wxyz"]
+        [
+            "dof",
+            "gravity_torque",
+            "jacobian",
+            "joints",
+            "q",
+            "robot",
+            "tool_link",
+            "tool_position",
+            "tool_quaternion_wxyz"
+        ]
     );
     assert_eq!(value["dof"], 7);
     assert_eq!(value["jacobian"].as_array().expect("rows").len(), 6);
     let out = skillc(&["robot", "examples/robots/lwr4.urdf", "--q", "0,1"]);
-    assert_eq!(out.status.code(), Some(2), "a wrong-length configuration is a usage error");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "a wrong-length configuration is a usage error"
+    );
     assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
 }
 
@@ -176,7 +250,10 @@ fn learn_writes_a_learned_file_with_the_documented_keys_and_rollout_previews_it(
     assert_eq!(value["frames"]["surface"]["kind"], "planar");
     assert_eq!(value["forces"]["push"]["kind"], "constant");
     let force = value["forces"]["push"]["value_n"].as_f64().expect("a number");
-    assert!((force - 10.0).abs() < 0.3, "learned {force} N, the demonstration pressed 10 N");
+    assert!(
+        (force - 10.0).abs() < 0.3,
+        "learned {force} N, the demonstration pressed 10 N"
+    );
     assert!(plots.join("slide_trajectory.svg").exists() && plots.join("slide_learned_force.svg").exists());
 
     let out = skillc(&["rollout", learned.to_str().expect("utf8"), "--goal-offset", "0,0,-0.05"]);
@@ -198,9 +275,19 @@ fn learn_refuses_a_demonstration_without_contact_and_writes_nothing() {
     }
     std::fs::write(&demo, text).expect("write");
     let learned = dir.join("touch.learned.json");
-    let out = skillc(&["learn", "stdlib-skills/touch.skill", demo.to_str().expect("utf8"), "-o", learned.to_str().expect("utf8")]);
+    let out = skillc(&[
+        "learn",
+        "stdlib-skills/touch.skill",
+        demo.to_str().expect("utf8"),
+        "-o",
+        learned.to_str().expect("utf8"),
+    ]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no contact"), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no contact"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(!learned.exists());
     std::fs::remove_dir_all(&dir).expect("clean up");
 }

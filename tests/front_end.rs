@@ -46,10 +46,19 @@ fn ok_corpus_compiles_without_diagnostics_and_matches_ir_snapshots() {
     for path in files {
         let compilation = compile(&path);
         let rendered = skillc::render::all_plain(&compilation, 80);
-        assert!(compilation.diags.is_empty(), "{} has diagnostics:\n{rendered}", path.display());
+        assert!(
+            compilation.diags.is_empty(),
+            "{} has diagnostics:\n{rendered}",
+            path.display()
+        );
         let program = compilation.program.expect("no diagnostics means a program");
         let name = path.file_stem().expect("file name").to_string_lossy().into_owned();
-        let dir = path.parent().and_then(|p| p.file_name()).expect("parent dir").to_string_lossy().into_owned();
+        let dir = path
+            .parent()
+            .and_then(|p| p.file_name())
+            .expect("parent dir")
+            .to_string_lossy()
+            .into_owned();
         insta::with_settings!({ snapshot_path => "snapshots", prepend_module_to_snapshot => false }, {
             insta::assert_yaml_snapshot!(format!("ir__{dir}__{name}"), program);
         });
@@ -62,10 +71,18 @@ fn err_corpus_reports_the_declared_code_and_matches_diagnostic_snapshots() {
         let compilation = compile(&path);
         let code = declared_code(&path);
         let codes: BTreeSet<&str> = compilation.diags.iter().map(|d| d.code.as_str()).collect();
-        assert!(codes.contains(code.as_str()), "{} should report {code}, reported {codes:?}", path.display());
+        assert!(
+            codes.contains(code.as_str()),
+            "{} should report {code}, reported {codes:?}",
+            path.display()
+        );
         let severity = Code::ALL.iter().find(|c| c.as_str() == code).map(|c| c.severity());
         if severity == Some(Severity::Error) {
-            assert!(compilation.program.is_none(), "{}: an error must withhold the IR", path.display());
+            assert!(
+                compilation.program.is_none(),
+                "{}: an error must withhold the IR",
+                path.display()
+            );
         }
         let source = String::from_utf8_lossy(&std::fs::read(&path).expect("readable")).into_owned();
         let rendered = skillc::render::all_plain(&compilation, 80);
@@ -81,12 +98,18 @@ const GENERATED: &[Code] = &[Code::FileTooLarge];
 
 #[test]
 fn every_code_has_a_corpus_file() {
-    let declared: BTreeSet<String> = skill_files("tests/corpus/err").iter().map(|p| declared_code(p)).collect();
+    let declared: BTreeSet<String> = skill_files("tests/corpus/err")
+        .iter()
+        .map(|p| declared_code(p))
+        .collect();
     for code in Code::ALL {
         if GENERATED.contains(code) {
             continue;
         }
-        assert!(declared.contains(code.as_str()), "no tests/corpus/err file declares `// code: {code}`");
+        assert!(
+            declared.contains(code.as_str()),
+            "no tests/corpus/err file declares `// code: {code}`"
+        );
     }
 }
 
@@ -145,10 +168,17 @@ fn formatting_is_idempotent_and_preserves_the_ir() {
         // Compile both in the original directory so that imports resolve alike.
         let original = compile(&path);
         let mut load = |import: &str| {
-            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(import))
-                .map_err(|err| skill_compiler::LoadError { reason: err.to_string() })
+            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(import)).map_err(|err| {
+                skill_compiler::LoadError {
+                    reason: err.to_string(),
+                }
+            })
         };
-        let relative = path.strip_prefix(env!("CARGO_MANIFEST_DIR")).unwrap_or(&path).to_string_lossy().into_owned();
+        let relative = path
+            .strip_prefix(env!("CARGO_MANIFEST_DIR"))
+            .unwrap_or(&path)
+            .to_string_lossy()
+            .into_owned();
         let reformatted = skill_compiler::compile(skill_compiler::SourceFile::new(relative, once.as_str()), &mut load);
         let ir = |c: &Compilation| {
             without_positions(serde_json::to_value(c.program.as_ref().expect("compiles")).expect("serialises"))
@@ -164,10 +194,24 @@ fn formatting_keeps_every_comment() {
     let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
     assert!(diags.is_empty());
     let formatted = skill_compiler::fmt::format(&source, &ast);
-    for comment in ["// head", "// trailing", "// before state", "// after move", "// end", "// tail"] {
-        assert_eq!(formatted.matches(comment).count(), 1, "`{comment}` kept once in:\n{formatted}");
+    for comment in [
+        "// head",
+        "// trailing",
+        "// before state",
+        "// after move",
+        "// end",
+        "// tail",
+    ] {
+        assert_eq!(
+            formatted.matches(comment).count(),
+            1,
+            "`{comment}` kept once in:\n{formatted}"
+        );
     }
-    assert!(formatted.contains("move p from current  // after move"), "trailing comments stay on their line:\n{formatted}");
+    assert!(
+        formatted.contains("move p from current  // after move"),
+        "trailing comments stay on their line:\n{formatted}"
+    );
 }
 
 #[test]
@@ -181,7 +225,11 @@ fn ir_carries_its_version_and_source_positions() {
     assert_eq!(approach.span.file, "stdlib-skills/press.skill");
     let text = std::fs::read_to_string(&path).expect("readable");
     let at = approach.span.start as usize;
-    assert_eq!(&text[at..at + "approach".len()], "approach", "spans point at the state's name");
+    assert_eq!(
+        &text[at..at + "approach".len()],
+        "approach",
+        "spans point at the state's name"
+    );
     // The JSON round-trips.
     let json = serde_json::to_string(&program).expect("serialises");
     let back: skill_ir::Program = serde_json::from_str(&json).expect("deserialises");

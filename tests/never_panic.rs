@@ -12,16 +12,55 @@ const STDLIB: [&str; 4] = [
 
 /// Tokens that make mutations likely to stay near the grammar and reach the checker.
 const TOKENS: &[&str] = &[
-    "{", "}", "(", ")", "[", "]", ",", ":", "->", ".", "segment 1", "segment 9", "0", "-1", "5 N", "3 mm", "1e400",
-    "and", "or", "not", "state x", "terminal", "on", "move", "control force z", "position all", "in base", "ü",
-    "\"", "//", "///", "\n", " ", "N/m", "deg/s", "motion_done", "timeout", "force(", "extend along", "expect 0",
+    "{",
+    "}",
+    "(",
+    ")",
+    "[",
+    "]",
+    ",",
+    ":",
+    "->",
+    ".",
+    "segment 1",
+    "segment 9",
+    "0",
+    "-1",
+    "5 N",
+    "3 mm",
+    "1e400",
+    "and",
+    "or",
+    "not",
+    "state x",
+    "terminal",
+    "on",
+    "move",
+    "control force z",
+    "position all",
+    "in base",
+    "ü",
+    "\"",
+    "//",
+    "///",
+    "\n",
+    " ",
+    "N/m",
+    "deg/s",
+    "motion_done",
+    "timeout",
+    "force(",
+    "extend along",
+    "expect 0",
 ];
 
 fn compile_bytes(bytes: Vec<u8>) {
     match skillc::frontend::decode("fuzz.skill", bytes) {
         Ok(source) => {
             let compilation = skill_compiler::compile(source, &mut |_| {
-                Err(skill_compiler::LoadError { reason: "no imports in this test".to_string() })
+                Err(skill_compiler::LoadError {
+                    reason: "no imports in this test".to_string(),
+                })
             });
             // A program and errors never come together.
             assert_eq!(compilation.program.is_some(), !compilation.has_errors());
@@ -87,7 +126,9 @@ fn ten_megabytes_of_anything_get_one_diagnostic() {
 fn binary_input_is_reported_as_invalid_utf8_at_the_first_bad_byte() {
     let mut bytes = b"skill s {".to_vec();
     bytes.extend([0u8, 0xff, 0xfe, 0x00, 0x80]);
-    let Err(invalid) = skillc::frontend::decode("bin.skill", bytes) else { panic!("binary is not UTF-8") };
+    let Err(invalid) = skillc::frontend::decode("bin.skill", bytes) else {
+        panic!("binary is not UTF-8")
+    };
     let (source, diag) = *invalid;
     assert_eq!(diag.code, Code::InvalidUtf8);
     assert_eq!(source.line_col(diag.span().start), (1, 11));
@@ -104,7 +145,9 @@ fn long_but_valid_files_still_check() {
         ));
     }
     let compilation = skill_compiler::compile(SourceFile::new("many.skill", text), &mut |_| {
-        Err(skill_compiler::LoadError { reason: "none".to_string() })
+        Err(skill_compiler::LoadError {
+            reason: "none".to_string(),
+        })
     });
     assert!(compilation.diags.is_empty());
     assert_eq!(compilation.program.expect("compiles").skills.len(), 300);

@@ -31,7 +31,10 @@ fn every_rust_file_starts_with_a_module_doc_line() {
         })
         .map(|path| path.strip_prefix(root).unwrap_or(path).display().to_string())
         .collect();
-    assert!(offenders.is_empty(), "files without a leading `//!` line: {offenders:?}");
+    assert!(
+        offenders.is_empty(),
+        "files without a leading `//!` line: {offenders:?}"
+    );
 }
 
 #[test]
@@ -55,6 +58,11 @@ fn every_snapshot_belongs_to_a_corpus_or_stdlib_file() {
         } else {
             continue;
         };
-        assert!(source.exists(), "orphaned snapshot {} (no {})", snapshot.display(), source.display());
+        assert!(
+            source.exists(),
+            "orphaned snapshot {} (no {})",
+            snapshot.display(),
+            source.display()
+        );
     }
 }

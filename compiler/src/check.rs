@@ -16,7 +16,11 @@ use std::collections::{HashMap, VecDeque};
 pub const DEFAULT_STIFFNESS: [f64; 6] = [1500.0, 1500.0, 1500.0, 150.0, 150.0, 150.0];
 
 /// Default PI force gains when a state writes no `gains`.
-pub const DEFAULT_GAINS: ir::ForceGains = ir::ForceGains { kp: 0.5, ki: 5.0, integral_limit_n: Some(10.0) };
+pub const DEFAULT_GAINS: ir::ForceGains = ir::ForceGains {
+    kp: 0.5,
+    ki: 5.0,
+    integral_limit_n: Some(10.0),
+};
 
 /// Default number of DMP basis functions of a motion.
 pub const DEFAULT_MOTION_BASIS: u32 = 50;
@@ -145,7 +149,12 @@ impl<'a> Checker<'a> {
                         .map(|found| format!("did you mean `{found}`?"))
                         .unwrap_or_else(|| format!("units of {}: {}", dim, units::units_of(dim).join(", ")));
                     let diag = self
-                        .diag(Code::UnknownUnit, unit.span, format!("unknown unit `{}`", unit.name), "not a unit skillc knows")
+                        .diag(
+                            Code::UnknownUnit,
+                            unit.span,
+                            format!("unknown unit `{}`", unit.name),
+                            "not a unit skillc knows",
+                        )
                         .help(help);
                     self.report(diag);
                     return None;
@@ -164,7 +173,12 @@ impl<'a> Checker<'a> {
                 }
                 let value = number.value * factor;
                 if !value.is_finite() {
-                    let diag = self.diag(Code::OutOfRange, expr.span, format!("{what} is not finite"), "too large");
+                    let diag = self.diag(
+                        Code::OutOfRange,
+                        expr.span,
+                        format!("{what} is not finite"),
+                        "too large",
+                    );
                     self.report(diag);
                     return None;
                 }
@@ -172,7 +186,12 @@ impl<'a> Checker<'a> {
             }
             ExprKind::Number(number) => {
                 let diag = self
-                    .diag(Code::MissingUnit, expr.span, format!("{what} needs a unit"), format!("{dim} without a unit"))
+                    .diag(
+                        Code::MissingUnit,
+                        expr.span,
+                        format!("{what} needs a unit"),
+                        format!("{dim} without a unit"),
+                    )
                     .help(format!("write `{} {}`", number.text, dim.example_unit()));
                 self.report(diag);
                 None
@@ -195,7 +214,12 @@ impl<'a> Checker<'a> {
         match &expr.kind {
             ExprKind::Number(number) if number.value.is_finite() => Some(number.value),
             ExprKind::Number(_) => {
-                let diag = self.diag(Code::OutOfRange, expr.span, format!("{what} is not finite"), "too large");
+                let diag = self.diag(
+                    Code::OutOfRange,
+                    expr.span,
+                    format!("{what} is not finite"),
+                    "too large",
+                );
                 self.report(diag);
                 None
             }
@@ -212,7 +236,12 @@ impl<'a> Checker<'a> {
                 None
             }
             _ => {
-                let diag = self.diag(Code::BadArgument, expr.span, format!("{what} must be a number"), "not a number");
+                let diag = self.diag(
+                    Code::BadArgument,
+                    expr.span,
+                    format!("{what} must be a number"),
+                    "not a number",
+                );
                 self.report(diag);
                 None
             }
@@ -238,7 +267,12 @@ impl<'a> Checker<'a> {
                 }
             }
             _ => {
-                let diag = self.diag(Code::BadArgument, expr.span, format!("{what} must be a whole number"), "not a count");
+                let diag = self.diag(
+                    Code::BadArgument,
+                    expr.span,
+                    format!("{what} must be a whole number"),
+                    "not a count",
+                );
                 self.report(diag);
                 None
             }
@@ -249,7 +283,12 @@ impl<'a> Checker<'a> {
         match value {
             Some(v) if v > 0.0 => Some(v),
             Some(_) => {
-                let diag = self.diag(Code::OutOfRange, span, format!("{what} must be positive"), "zero or negative");
+                let diag = self.diag(
+                    Code::OutOfRange,
+                    span,
+                    format!("{what} must be positive"),
+                    "zero or negative",
+                );
                 self.report(diag);
                 None
             }
@@ -262,7 +301,12 @@ impl<'a> Checker<'a> {
             ExprKind::Str(text) => Some(text.clone()),
             _ => {
                 let diag = self
-                    .diag(Code::BadArgument, expr.span, format!("{what} must be a string"), "not a string")
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        format!("{what} must be a string"),
+                        "not a string",
+                    )
                     .help("put the path in double quotes");
                 self.report(diag);
                 None
@@ -386,7 +430,10 @@ impl<'a> Checker<'a> {
     }
 
     fn error_count(&self) -> usize {
-        self.diags.iter().filter(|d| d.file == self.file && d.severity() == Severity::Error).count()
+        self.diags
+            .iter()
+            .filter(|d| d.file == self.file && d.severity() == Severity::Error)
+            .count()
     }
 
     fn learn(&mut self, decls: &[ast::LearnDecl], scope: &mut SkillScope) -> Option<ir::LearnPlan> {
@@ -425,7 +472,10 @@ impl<'a> Checker<'a> {
                     continue;
                 }
             };
-            let name = decl.name.as_ref().expect("grammar: named learn declarations have a name");
+            let name = decl
+                .name
+                .as_ref()
+                .expect("grammar: named learn declarations have a name");
             if BUILTIN_FRAMES.contains(&name.name.as_str()) {
                 let diag = self
                     .diag(
@@ -440,14 +490,27 @@ impl<'a> Checker<'a> {
             }
             if let Some(earlier) = scope.symbols.get(&name.name) {
                 let diag = self
-                    .diag(Code::DuplicateName, name.span, format!("`{}` is declared twice", name.name), "second declaration")
+                    .diag(
+                        Code::DuplicateName,
+                        name.span,
+                        format!("`{}` is declared twice", name.name),
+                        "second declaration",
+                    )
                     .label(earlier.span, "first declared here")
                     .help("rename one of them");
                 self.report(diag);
                 continue;
             }
             let slot = &mut counters[kind as usize];
-            scope.symbols.insert(name.name.clone(), Sym { kind, id: *slot, span: name.span, used: false });
+            scope.symbols.insert(
+                name.name.clone(),
+                Sym {
+                    kind,
+                    id: *slot,
+                    span: name.span,
+                    used: false,
+                },
+            );
             *slot += 1;
         }
 
@@ -487,19 +550,30 @@ impl<'a> Checker<'a> {
             let span = self.ir_span(name.span);
             match decl.kind {
                 LearnKind::Frame => match self.frame_source(&decl.value, scope) {
-                    Some(source) => frames.push(ir::FrameDecl { name: name.name.clone(), source, span }),
+                    Some(source) => frames.push(ir::FrameDecl {
+                        name: name.name.clone(),
+                        source,
+                        span,
+                    }),
                     None => ok = false,
                 },
                 LearnKind::Motion => match self.motion(&decl.value, scope) {
-                    Some((segment, basis)) => {
-                        motions.push(ir::MotionDecl { name: name.name.clone(), segment, basis, span })
-                    }
+                    Some((segment, basis)) => motions.push(ir::MotionDecl {
+                        name: name.name.clone(),
+                        segment,
+                        basis,
+                        span,
+                    }),
                     None => ok = false,
                 },
                 LearnKind::Force => match self.force_source(&decl.value, scope) {
                     Some(source) => {
                         scope.force_sources.push(source.clone());
-                        forces.push(ir::ForceDecl { name: name.name.clone(), source, span })
+                        forces.push(ir::ForceDecl {
+                            name: name.name.clone(),
+                            source,
+                            span,
+                        })
                     }
                     None => {
                         scope.force_sources.push(ir::ForceSource::Tracked);
@@ -507,7 +581,11 @@ impl<'a> Checker<'a> {
                     }
                 },
                 LearnKind::Threshold => match self.threshold_source(&decl.value, scope) {
-                    Some(source) => thresholds.push(ir::ThresholdDecl { name: name.name.clone(), source, span }),
+                    Some(source) => thresholds.push(ir::ThresholdDecl {
+                        name: name.name.clone(),
+                        source,
+                        span,
+                    }),
                     None => ok = false,
                 },
                 _ => {}
@@ -564,7 +642,14 @@ impl<'a> Checker<'a> {
                 let bound = self.bind_args(
                     "cluster",
                     args,
-                    &["linkage", "time_weight", "connectivity", "cut", "min_length", "features"],
+                    &[
+                        "linkage",
+                        "time_weight",
+                        "connectivity",
+                        "cut",
+                        "min_length",
+                        "features",
+                    ],
                     0,
                 );
                 let linkage = match bound.get("linkage") {
@@ -598,7 +683,9 @@ impl<'a> Checker<'a> {
                         let weight = self.positive(value, weight.span, "the time weight")?;
                         ir::Temporal::TimeFeature { weight }
                     }
-                    (None, Some(k)) => ir::Temporal::Connectivity { k: self.count(k, "the connectivity")? },
+                    (None, Some(k)) => ir::Temporal::Connectivity {
+                        k: self.count(k, "the connectivity")?,
+                    },
                     (None, None) => ir::Temporal::Connectivity { k: 10 },
                 };
                 let min_length_s = match bound.get("min_length") {
@@ -627,10 +714,24 @@ impl<'a> Checker<'a> {
                     },
                 };
                 let features = self.features(bound.get("features").copied())?;
-                (ir::Segmentation::Cluster { linkage, temporal, cut, min_length_s, features }, implied)
+                (
+                    ir::Segmentation::Cluster {
+                        linkage,
+                        temporal,
+                        cut,
+                        min_length_s,
+                        features,
+                    },
+                    implied,
+                )
             }
             "changepoint" => {
-                let bound = self.bind_args("changepoint", args, &["min_length", "models", "particles", "features"], 0);
+                let bound = self.bind_args(
+                    "changepoint",
+                    args,
+                    &["min_length", "models", "particles", "features"],
+                    0,
+                );
                 let min_length_s = match bound.get("min_length") {
                     Some(expr) => {
                         let value = self.quantity(expr, Dim::Time, "the minimum segment length");
@@ -647,7 +748,10 @@ impl<'a> Checker<'a> {
                                 let model = self.enum_name(
                                     item,
                                     "a segment model",
-                                    &[("constant", ir::SegmentModel::Constant), ("linear", ir::SegmentModel::Linear)],
+                                    &[
+                                        ("constant", ir::SegmentModel::Constant),
+                                        ("linear", ir::SegmentModel::Linear),
+                                    ],
                                 )?;
                                 models.push(model);
                             }
@@ -655,7 +759,12 @@ impl<'a> Checker<'a> {
                         }
                         _ => {
                             let diag = self
-                                .diag(Code::BadArgument, expr.span, "`models` must be a list of segment models", "not a list")
+                                .diag(
+                                    Code::BadArgument,
+                                    expr.span,
+                                    "`models` must be a list of segment models",
+                                    "not a list",
+                                )
                                 .help("write `models: [constant, linear]`");
                             self.report(diag);
                             return None;
@@ -667,7 +776,15 @@ impl<'a> Checker<'a> {
                     None => 100,
                 };
                 let features = self.features(bound.get("features").copied())?;
-                (ir::Segmentation::Changepoint { min_length_s, models, max_particles, features }, None)
+                (
+                    ir::Segmentation::Changepoint {
+                        min_length_s,
+                        models,
+                        max_particles,
+                        features,
+                    },
+                    None,
+                )
             }
             other => {
                 let diag = self
@@ -707,7 +824,9 @@ impl<'a> Checker<'a> {
 
     /// `features: [position, force, force_magnitude]` (default position and force).
     fn features(&mut self, expr: Option<&ast::Expr>) -> Option<ir::SegmentFeatures> {
-        let Some(expr) = expr else { return Some(ir::SegmentFeatures::default()) };
+        let Some(expr) = expr else {
+            return Some(ir::SegmentFeatures::default());
+        };
         let ExprKind::List(items) = &expr.kind else {
             let diag = self
                 .diag(Code::BadArgument, expr.span, "`features` must be a list", "not a list")
@@ -715,16 +834,29 @@ impl<'a> Checker<'a> {
             self.report(diag);
             return None;
         };
-        let mut features = ir::SegmentFeatures { position: false, force: false, force_magnitude: false };
+        let mut features = ir::SegmentFeatures {
+            position: false,
+            force: false,
+            force_magnitude: false,
+        };
         for item in items {
-            match self.enum_name(item, "segmentation feature", &[("position", 0), ("force", 1), ("force_magnitude", 2)])? {
+            match self.enum_name(
+                item,
+                "segmentation feature",
+                &[("position", 0), ("force", 1), ("force_magnitude", 2)],
+            )? {
                 0 => features.position = true,
                 1 => features.force = true,
                 _ => features.force_magnitude = true,
             }
         }
         if !(features.position || features.force || features.force_magnitude) {
-            let diag = self.diag(Code::BadArgument, expr.span, "`features` is empty", "nothing to segment on");
+            let diag = self.diag(
+                Code::BadArgument,
+                expr.span,
+                "`features` is empty",
+                "nothing to segment on",
+            );
             self.report(diag);
             return None;
         }
@@ -773,7 +905,12 @@ impl<'a> Checker<'a> {
             }
         }
         let diag = self
-            .diag(Code::BadArgument, expr.span, "`cut` must be `count(N)` or `distance(D)`", "not a cut")
+            .diag(
+                Code::BadArgument,
+                expr.span,
+                "`cut` must be `count(N)` or `distance(D)`",
+                "not a cut",
+            )
             .help("write `cut: count(3)`");
         self.report(diag);
         None
@@ -786,7 +923,12 @@ impl<'a> Checker<'a> {
                 return Some(*value);
             }
             let diag = self
-                .diag(Code::BadArgument, name.span, format!("unknown {what} `{}`", name.name), format!("not {what}"))
+                .diag(
+                    Code::BadArgument,
+                    name.span,
+                    format!("unknown {what} `{}`", name.name),
+                    format!("not {what}"),
+                )
                 .help(
                     suggest(&name.name, names.iter().copied())
                         .unwrap_or_else(|| format!("use one of {}", join_ticked(&names))),
@@ -795,7 +937,12 @@ impl<'a> Checker<'a> {
             return None;
         }
         let diag = self
-            .diag(Code::BadArgument, expr.span, format!("expected {what}"), format!("not {what}"))
+            .diag(
+                Code::BadArgument,
+                expr.span,
+                format!("expected {what}"),
+                format!("not {what}"),
+            )
             .help(format!("use one of {}", join_ticked(&names)));
         self.report(diag);
         None
@@ -811,7 +958,12 @@ impl<'a> Checker<'a> {
         };
         if n == 0 {
             let diag = self
-                .diag(Code::OutOfRange, expr.span, "segments count from 1", "there is no segment 0")
+                .diag(
+                    Code::OutOfRange,
+                    expr.span,
+                    "segments count from 1",
+                    "there is no segment 0",
+                )
                 .help("write `segment 1` for the first segment");
             self.report(diag);
             return None;
@@ -900,7 +1052,11 @@ impl<'a> Checker<'a> {
                     return None;
                 };
                 let segment = self.segment(segment, scope)?;
-                return Some(if name.name == "end" { ir::Point::End(segment) } else { ir::Point::Start(segment) });
+                return Some(if name.name == "end" {
+                    ir::Point::End(segment)
+                } else {
+                    ir::Point::Start(segment)
+                });
             }
             _ => {}
         }
@@ -909,7 +1065,12 @@ impl<'a> Checker<'a> {
             _ => None,
         };
         let diag = self
-            .diag(Code::BadArgument, expr.span, "expected a point of the demonstration", "not a point")
+            .diag(
+                Code::BadArgument,
+                expr.span,
+                "expected a point of the demonstration",
+                "not a point",
+            )
             .help(help.unwrap_or_else(|| "write `end(segment 1)`, `start(segment 2)` or `peak_force`".to_string()));
         self.report(diag);
         None
@@ -931,8 +1092,12 @@ impl<'a> Checker<'a> {
                     format!("expected {}", want.describe()),
                 )
                 .label(span, format!("declared as {} here", kind.describe()));
-            let same_kind: Vec<&str> =
-                scope.symbols.iter().filter(|(_, s)| s.kind == want).map(|(n, _)| n.as_str()).collect();
+            let same_kind: Vec<&str> = scope
+                .symbols
+                .iter()
+                .filter(|(_, s)| s.kind == want)
+                .map(|(n, _)| n.as_str())
+                .collect();
             if want == SymKind::Motion && same_kind.is_empty() {
                 diag = diag.help("no motion is learned: declare one in `learn`, e.g. `motion path = dmp(segment 1)`");
             } else if !same_kind.is_empty() {
@@ -943,17 +1108,29 @@ impl<'a> Checker<'a> {
             self.report(diag);
             return None;
         }
-        let mut candidates: Vec<&str> =
-            scope.symbols.iter().filter(|(_, s)| s.kind == want).map(|(n, _)| n.as_str()).collect();
+        let mut candidates: Vec<&str> = scope
+            .symbols
+            .iter()
+            .filter(|(_, s)| s.kind == want)
+            .map(|(n, _)| n.as_str())
+            .collect();
         if want == SymKind::Frame {
             candidates.extend(BUILTIN_FRAMES);
         }
         candidates.sort_unstable();
         let help = suggest(&name.name, candidates.iter().copied()).or_else(|| {
             if candidates.is_empty() {
-                Some(format!("declare it in `learn`: `{} {} = ...`", kind_noun(want), name.name))
+                Some(format!(
+                    "declare it in `learn`: `{} {} = ...`",
+                    kind_noun(want),
+                    name.name
+                ))
             } else {
-                Some(format!("{}s declared here: {}", kind_noun(want), join_ticked(&candidates)))
+                Some(format!(
+                    "{}s declared here: {}",
+                    kind_noun(want),
+                    join_ticked(&candidates)
+                ))
             }
         });
         let diag = self
@@ -972,7 +1149,9 @@ impl<'a> Checker<'a> {
         match name.name.as_str() {
             "base" => Some(ir::FrameRef::Base),
             "tool" => Some(ir::FrameRef::Tool),
-            _ => self.resolve(name, SymKind::Frame, scope).map(|id| ir::FrameRef::Learned(ir::FrameId(id))),
+            _ => self
+                .resolve(name, SymKind::Frame, scope)
+                .map(|id| ir::FrameRef::Learned(ir::FrameId(id))),
         }
     }
 
@@ -982,17 +1161,31 @@ impl<'a> Checker<'a> {
         }
         let names: Vec<&str> = ir::Axis::ALL.iter().map(|a| a.name()).collect();
         let diag = self
-            .diag(Code::UnknownAxis, name.span, format!("unknown axis `{}`", name.name), "not an axis")
+            .diag(
+                Code::UnknownAxis,
+                name.span,
+                format!("unknown axis `{}`", name.name),
+                "not an axis",
+            )
             .help(match name.name.as_str() {
-                "position" | "force" => "separate control groups with a comma: `control force z, position x y rx ry rz`".to_string(),
-                _ => suggest(&name.name, names.iter().copied()).unwrap_or_else(|| "axes are x y z rx ry rz".to_string()),
+                "position" | "force" => {
+                    "separate control groups with a comma: `control force z, position x y rx ry rz`".to_string()
+                }
+                _ => {
+                    suggest(&name.name, names.iter().copied()).unwrap_or_else(|| "axes are x y z rx ry rz".to_string())
+                }
             });
         self.report(diag);
         None
     }
 
     /// `frame.axis`; `translation` demands x, y or z.
-    fn frame_axis(&mut self, axis_ref: &ast::AxisRef, translation: bool, scope: &mut SkillScope) -> Option<ir::FrameAxis> {
+    fn frame_axis(
+        &mut self,
+        axis_ref: &ast::AxisRef,
+        translation: bool,
+        scope: &mut SkillScope,
+    ) -> Option<ir::FrameAxis> {
         let frame = self.frame_ref(&axis_ref.frame, scope);
         let axis = self.axis(&axis_ref.axis)?;
         if translation && axis.is_rotation() {
@@ -1010,13 +1203,24 @@ impl<'a> Checker<'a> {
         Some(ir::FrameAxis { frame: frame?, axis })
     }
 
-    fn along(&mut self, expr: Option<&&ast::Expr>, function: &str, span: Span, scope: &mut SkillScope) -> Option<ir::FrameAxis> {
+    fn along(
+        &mut self,
+        expr: Option<&&ast::Expr>,
+        function: &str,
+        span: Span,
+        scope: &mut SkillScope,
+    ) -> Option<ir::FrameAxis> {
         match expr {
             Some(expr) => match &expr.kind {
                 ExprKind::Axis(axis_ref) => self.frame_axis(axis_ref, true, scope),
                 _ => {
                     let diag = self
-                        .diag(Code::BadArgument, expr.span, "`along` must be a frame axis", "not a frame axis")
+                        .diag(
+                            Code::BadArgument,
+                            expr.span,
+                            "`along` must be a frame axis",
+                            "not a frame axis",
+                        )
                         .help("write `along: contact.z`");
                     self.report(diag);
                     None
@@ -1057,17 +1261,33 @@ impl<'a> Checker<'a> {
             ExprKind::Name(name) => {
                 let help = suggest(&name.name, FRAME_FUNCTIONS.iter().copied())
                     .map(|s| format!("{s} frames are learned by a call, like `planar(segment 2)`"))
-                    .unwrap_or_else(|| "write a call such as `planar(segment 2)` or `force_aligned(at: peak_force)`".to_string());
-                let code = if FRAME_FUNCTIONS.contains(&name.name.as_str()) { Code::BadArgument } else { Code::UnknownFunction };
+                    .unwrap_or_else(|| {
+                        "write a call such as `planar(segment 2)` or `force_aligned(at: peak_force)`".to_string()
+                    });
+                let code = if FRAME_FUNCTIONS.contains(&name.name.as_str()) {
+                    Code::BadArgument
+                } else {
+                    Code::UnknownFunction
+                };
                 let diag = self
-                    .diag(code, expr.span, format!("`{}` is not a way to learn a frame", name.name), "expected a call")
+                    .diag(
+                        code,
+                        expr.span,
+                        format!("`{}` is not a way to learn a frame", name.name),
+                        "expected a call",
+                    )
                     .help(help);
                 self.report(diag);
                 return None;
             }
             _ => {
                 let diag = self
-                    .diag(Code::BadArgument, expr.span, "a frame is learned by a call", "not a frame source")
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        "a frame is learned by a call",
+                        "not a frame source",
+                    )
                     .help("write `planar(segment 2)` or `force_aligned(at: peak_force)`");
                 self.report(diag);
                 return None;
@@ -1089,12 +1309,21 @@ impl<'a> Checker<'a> {
                 return None;
             };
             let segment = self.segment(segment, scope)?;
-            return Some(ir::FrameSource::Constraint { segment, candidates: vec![model] });
+            return Some(ir::FrameSource::Constraint {
+                segment,
+                candidates: vec![model],
+            });
         }
         match name.name.as_str() {
             "constraint" => {
                 let bound = self.bind_args("constraint", args, &["segment", "models"], 1);
-                let segment = self.required_segment(bound.get("segment"), "constraint", expr.span, "constraint(segment 2)", scope);
+                let segment = self.required_segment(
+                    bound.get("segment"),
+                    "constraint",
+                    expr.span,
+                    "constraint(segment 2)",
+                    scope,
+                );
                 let candidates = match bound.get("models") {
                     None => vec![
                         ir::ConstraintModel::FixedPoint,
@@ -1132,15 +1361,20 @@ impl<'a> Checker<'a> {
                         models
                     }
                 };
-                Some(ir::FrameSource::Constraint { segment: segment?, candidates })
+                Some(ir::FrameSource::Constraint {
+                    segment: segment?,
+                    candidates,
+                })
             }
             "force_aligned" => {
                 let bound = self.bind_args("force_aligned", args, &["segment", "at"], 1);
                 match (bound.get("segment"), bound.get("at")) {
-                    (Some(segment), None) => {
-                        Some(ir::FrameSource::ForceAlignedSamples { segment: self.segment(segment, scope)? })
-                    }
-                    (None, Some(at)) => Some(ir::FrameSource::ForceAlignedAt { point: self.point(at, scope)? }),
+                    (Some(segment), None) => Some(ir::FrameSource::ForceAlignedSamples {
+                        segment: self.segment(segment, scope)?,
+                    }),
+                    (None, Some(at)) => Some(ir::FrameSource::ForceAlignedAt {
+                        point: self.point(at, scope)?,
+                    }),
                     (Some(_), Some(at)) => {
                         let diag = self
                             .diag(
@@ -1154,7 +1388,12 @@ impl<'a> Checker<'a> {
                         None
                     }
                     (None, None) => {
-                        self.missing_arg("force_aligned", "segment", expr.span, "force_aligned(segment 2)` or `force_aligned(at: peak_force)");
+                        self.missing_arg(
+                            "force_aligned",
+                            "segment",
+                            expr.span,
+                            "force_aligned(segment 2)` or `force_aligned(at: peak_force)",
+                        );
                         None
                     }
                 }
@@ -1169,11 +1408,19 @@ impl<'a> Checker<'a> {
                     Some(rpy) => self.vector3(rpy, Dim::Angle, "the roll-pitch-yaw angles")?,
                     None => [0.0; 3],
                 };
-                Some(ir::FrameSource::Fixed { origin_m: origin, quaternion_wxyz: quaternion_from_rpy(rpy) })
+                Some(ir::FrameSource::Fixed {
+                    origin_m: origin,
+                    quaternion_wxyz: quaternion_from_rpy(rpy),
+                })
             }
             other => {
                 let diag = self
-                    .diag(Code::UnknownFunction, name.span, format!("unknown frame source `{other}`"), "not a frame source")
+                    .diag(
+                        Code::UnknownFunction,
+                        name.span,
+                        format!("unknown frame source `{other}`"),
+                        "not a frame source",
+                    )
                     .help(
                         suggest(other, FRAME_FUNCTIONS.iter().copied())
                             .unwrap_or_else(|| format!("frames come from {}", join_ticked(FRAME_FUNCTIONS))),
@@ -1200,7 +1447,12 @@ impl<'a> Checker<'a> {
             _ => {
                 let unit = dim.example_unit();
                 let diag = self
-                    .diag(Code::BadArgument, expr.span, format!("{what} must be a list of 3 values"), "expected 3 values")
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        format!("{what} must be a list of 3 values"),
+                        "expected 3 values",
+                    )
                     .help(format!("write `[0 {unit}, 0 {unit}, 0 {unit}]`"));
                 self.report(diag);
                 None
@@ -1218,14 +1470,24 @@ impl<'a> Checker<'a> {
             }
             ExprKind::Call { name, .. } | ExprKind::Name(name) => {
                 let diag = self
-                    .diag(Code::UnknownFunction, name.span, format!("unknown motion source `{}`", name.name), "not a motion source")
+                    .diag(
+                        Code::UnknownFunction,
+                        name.span,
+                        format!("unknown motion source `{}`", name.name),
+                        "not a motion source",
+                    )
                     .help("motions are learned as `dmp(segment N)`");
                 self.report(diag);
                 None
             }
             _ => {
                 let diag = self
-                    .diag(Code::BadArgument, expr.span, "a motion is learned by `dmp(segment N)`", "not a motion source")
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        "a motion is learned by `dmp(segment N)`",
+                        "not a motion source",
+                    )
                     .help("write `dmp(segment 1)`");
                 self.report(diag);
                 None
@@ -1247,36 +1509,75 @@ impl<'a> Checker<'a> {
             ExprKind::Call { name, args } => match name.name.as_str() {
                 "constant" => {
                     let bound = self.bind_args("constant", args, &["segment", "along"], 1);
-                    let segment = self.required_segment(bound.get("segment"), "constant", expr.span, "constant(segment 2, along: surface.z)", scope);
+                    let segment = self.required_segment(
+                        bound.get("segment"),
+                        "constant",
+                        expr.span,
+                        "constant(segment 2, along: surface.z)",
+                        scope,
+                    );
                     let along = self.along(bound.get("along"), "constant", expr.span, scope);
-                    Some(ir::ForceSource::Constant { segment: segment?, along: along? })
+                    Some(ir::ForceSource::Constant {
+                        segment: segment?,
+                        along: along?,
+                    })
                 }
                 "force_at" => {
                     let bound = self.bind_args("force_at", args, &["point", "along"], 1);
-                    let point = self.required_point(bound.get("point"), "force_at", expr.span, "force_at(end(segment 1), along: contact.z)", scope);
+                    let point = self.required_point(
+                        bound.get("point"),
+                        "force_at",
+                        expr.span,
+                        "force_at(end(segment 1), along: contact.z)",
+                        scope,
+                    );
                     let along = self.along(bound.get("along"), "force_at", expr.span, scope);
-                    Some(ir::ForceSource::At { point: point?, along: along? })
+                    Some(ir::ForceSource::At {
+                        point: point?,
+                        along: along?,
+                    })
                 }
                 "dmp" => {
                     let bound = self.bind_args("dmp", args, &["segment", "basis"], 1);
-                    let segment = self.required_segment(bound.get("segment"), "dmp", expr.span, "dmp(segment 2)", scope);
+                    let segment =
+                        self.required_segment(bound.get("segment"), "dmp", expr.span, "dmp(segment 2)", scope);
                     let basis = self.basis(bound.get("basis"), DEFAULT_FORCE_BASIS);
-                    Some(ir::ForceSource::Dmp { segment: segment?, basis: basis? })
+                    Some(ir::ForceSource::Dmp {
+                        segment: segment?,
+                        basis: basis?,
+                    })
                 }
                 "magnitude" => {
                     let bound = self.bind_args("magnitude", args, &["segment", "along", "basis"], 1);
-                    let segment = self.required_segment(bound.get("segment"), "magnitude", expr.span, "magnitude(segment 2, along: surface.z)", scope);
+                    let segment = self.required_segment(
+                        bound.get("segment"),
+                        "magnitude",
+                        expr.span,
+                        "magnitude(segment 2, along: surface.z)",
+                        scope,
+                    );
                     let along = self.along(bound.get("along"), "magnitude", expr.span, scope);
                     let basis = self.basis(bound.get("basis"), DEFAULT_FORCE_BASIS);
-                    Some(ir::ForceSource::Magnitude { segment: segment?, along: along?, basis: basis? })
+                    Some(ir::ForceSource::Magnitude {
+                        segment: segment?,
+                        along: along?,
+                        basis: basis?,
+                    })
                 }
                 other => {
                     let diag = self
-                        .diag(Code::UnknownFunction, name.span, format!("unknown force source `{other}`"), "not a force source")
-                        .help(
-                            suggest(other, FORCE_FUNCTIONS.iter().copied())
-                                .unwrap_or_else(|| format!("forces come from {}, or a literal like `5 N`", join_ticked(FORCE_FUNCTIONS))),
-                        );
+                        .diag(
+                            Code::UnknownFunction,
+                            name.span,
+                            format!("unknown force source `{other}`"),
+                            "not a force source",
+                        )
+                        .help(suggest(other, FORCE_FUNCTIONS.iter().copied()).unwrap_or_else(|| {
+                            format!(
+                                "forces come from {}, or a literal like `5 N`",
+                                join_ticked(FORCE_FUNCTIONS)
+                            )
+                        }));
                     self.report(diag);
                     None
                 }
@@ -1317,7 +1618,13 @@ impl<'a> Checker<'a> {
             }
             ExprKind::Call { name, args } if name.name == "force_at" => {
                 let bound = self.bind_args("force_at", args, &["point", "along", "scale"], 1);
-                let point = self.required_point(bound.get("point"), "force_at", expr.span, "force_at(end(segment 1), along: contact.z)", scope);
+                let point = self.required_point(
+                    bound.get("point"),
+                    "force_at",
+                    expr.span,
+                    "force_at(end(segment 1), along: contact.z)",
+                    scope,
+                );
                 let along = self.along(bound.get("along"), "force_at", expr.span, scope);
                 let scale = match bound.get("scale") {
                     Some(scale) => {
@@ -1326,21 +1633,34 @@ impl<'a> Checker<'a> {
                     }
                     None => Some(1.0),
                 };
-                Some(ir::ThresholdSource::ForceAt { point: point?, along: along?, scale: scale? })
+                Some(ir::ThresholdSource::ForceAt {
+                    point: point?,
+                    along: along?,
+                    scale: scale?,
+                })
             }
             ExprKind::Call { name, .. } | ExprKind::Name(name) => {
                 let diag = self
-                    .diag(Code::UnknownFunction, name.span, format!("unknown threshold source `{}`", name.name), "not a threshold source")
-                    .help(
-                        suggest(&name.name, ["force_at"])
-                            .unwrap_or_else(|| "thresholds are learned by `force_at(POINT, along: FRAME.z)` or written like `3 N`".to_string()),
-                    );
+                    .diag(
+                        Code::UnknownFunction,
+                        name.span,
+                        format!("unknown threshold source `{}`", name.name),
+                        "not a threshold source",
+                    )
+                    .help(suggest(&name.name, ["force_at"]).unwrap_or_else(|| {
+                        "thresholds are learned by `force_at(POINT, along: FRAME.z)` or written like `3 N`".to_string()
+                    }));
                 self.report(diag);
                 None
             }
             _ => {
                 let diag = self
-                    .diag(Code::BadArgument, expr.span, "not a threshold source", "expected a threshold")
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        "not a threshold source",
+                        "expected a threshold",
+                    )
                     .help("write `force_at(end(segment 1), along: contact.z)` or a literal like `3 N`");
                 self.report(diag);
                 None
@@ -1400,12 +1720,18 @@ impl<'a> Checker<'a> {
                                     format!("unknown outcome `{other}`"),
                                     "not an outcome",
                                 )
-                                .help(suggest(other, ["success", "failure"]).unwrap_or_else(|| "a terminal is `success` or `failure`".to_string()));
+                                .help(
+                                    suggest(other, ["success", "failure"])
+                                        .unwrap_or_else(|| "a terminal is `success` or `failure`".to_string()),
+                                );
                             self.report(diag);
                             None
                         }
                     };
-                    outcome.map(|outcome| ir::StateKind::Terminal { outcome, message: message.clone() })
+                    outcome.map(|outcome| ir::StateKind::Terminal {
+                        outcome,
+                        message: message.clone(),
+                    })
                 }
                 ast::StateBody::Active(stmts) => self
                     .active_state(id, stmts, state, &ids, &state_names, scope, &mut transitions)
@@ -1426,9 +1752,13 @@ impl<'a> Checker<'a> {
         let mut successors: Vec<Vec<usize>> = vec![Vec::new(); unique.len()];
         let mut targets_known = true;
         for (index, state) in unique.iter().enumerate() {
-            let ast::StateBody::Active(stmts) = &state.body else { continue };
+            let ast::StateBody::Active(stmts) = &state.body else {
+                continue;
+            };
             for stmt in stmts {
-                let StmtKind::Transition { target, .. } = &stmt.kind else { continue };
+                let StmtKind::Transition { target, .. } = &stmt.kind else {
+                    continue;
+                };
                 let name = match target {
                     ast::Target::State(name) => name,
                     ast::Target::Extend { then, .. } => then,
@@ -1440,8 +1770,10 @@ impl<'a> Checker<'a> {
             }
         }
         if targets_known {
-            let terminal: Vec<bool> =
-                unique.iter().map(|state| matches!(state.body, ast::StateBody::Terminal { .. })).collect();
+            let terminal: Vec<bool> = unique
+                .iter()
+                .map(|state| matches!(state.body, ast::StateBody::Terminal { .. }))
+                .collect();
             self.graph(&unique, &successors, &terminal);
         }
         (states, transitions, Some(ir::StateId(0)))
@@ -1502,7 +1834,10 @@ impl<'a> Checker<'a> {
                 StmtKind::Move { motion: name, .. } => {
                     motion = self.resolve(name, SymKind::Motion, scope).map(ir::MotionId);
                 }
-                StmtKind::Control { groups, frame: frame_name } => {
+                StmtKind::Control {
+                    groups,
+                    frame: frame_name,
+                } => {
                     control_span = Some(stmt.span);
                     if let Some(name) = frame_name {
                         if let Some(resolved) = self.frame_ref(name, scope) {
@@ -1538,7 +1873,12 @@ impl<'a> Checker<'a> {
                             from: id,
                             guard: resolved_guard,
                             action,
-                            guard_text: self.src.slice(guard.span).split_whitespace().collect::<Vec<_>>().join(" "),
+                            guard_text: self
+                                .src
+                                .slice(guard.span)
+                                .split_whitespace()
+                                .collect::<Vec<_>>()
+                                .join(" "),
                             span: self.ir_span(stmt.span),
                         };
                         state_transitions.push((transition, guard, stmt.span));
@@ -1557,7 +1897,9 @@ impl<'a> Checker<'a> {
                     format!("state `{}` force-controls axes but applies no force", state.name.name),
                     "force-controlled axes here",
                 )
-                .help("add `apply NAME` with a force from `learn`, or declare `force NAME = tracked` for pure compliance");
+                .help(
+                    "add `apply NAME` with a force from `learn`, or declare `force NAME = tracked` for pure compliance",
+                );
             self.report(diag);
         }
         if !has_force_axes {
@@ -1566,7 +1908,10 @@ impl<'a> Checker<'a> {
                     .diag(
                         Code::ForceWithoutForceAxes,
                         span,
-                        format!("state `{}` applies a force but controls no axis in force", state.name.name),
+                        format!(
+                            "state `{}` applies a force but controls no axis in force",
+                            state.name.name
+                        ),
                         "this force is ignored",
                     )
                     .help("make an axis force-controlled, e.g. `control force z, position x y rx ry rz in FRAME`");
@@ -1622,7 +1967,12 @@ impl<'a> Checker<'a> {
                 };
                 if let Some((_, earlier)) = assigned[axis.index()] {
                     let diag = self
-                        .diag(Code::RepeatedAxis, axis_span, format!("axis `{}` is assigned twice", axis.name()), "again here")
+                        .diag(
+                            Code::RepeatedAxis,
+                            axis_span,
+                            format!("axis `{}` is assigned twice", axis.name()),
+                            "again here",
+                        )
                         .label(earlier, "first assigned here")
                         .help("name each of x y z rx ry rz once");
                     self.report(diag);
@@ -1632,8 +1982,11 @@ impl<'a> Checker<'a> {
                 assigned[axis.index()] = Some((!group.force, axis_span));
             }
         }
-        let missing: Vec<&str> =
-            ir::Axis::ALL.iter().filter(|axis| assigned[axis.index()].is_none()).map(|axis| axis.name()).collect();
+        let missing: Vec<&str> = ir::Axis::ALL
+            .iter()
+            .filter(|axis| assigned[axis.index()].is_none())
+            .map(|axis| axis.name())
+            .collect();
         if ok && !missing.is_empty() {
             let diag = self
                 .diag(
@@ -1675,7 +2028,9 @@ impl<'a> Checker<'a> {
                 continue;
             }
             let dim = if rotation { Dim::RotStiffness } else { Dim::Stiffness };
-            let Some(k) = self.quantity(&value.value, dim, "the stiffness") else { continue };
+            let Some(k) = self.quantity(&value.value, dim, "the stiffness") else {
+                continue;
+            };
             if k <= 0.0 {
                 let diag = self
                     .diag(
@@ -1710,14 +2065,25 @@ impl<'a> Checker<'a> {
 
     fn gains(&mut self, args: &[ast::Arg]) -> ir::ForceGains {
         let bound = self.bind_args("gains", args, &["kp", "ki", "limit"], 0);
-        let mut gains = ir::ForceGains { kp: DEFAULT_GAINS.kp, ki: DEFAULT_GAINS.ki, integral_limit_n: None };
+        let mut gains = ir::ForceGains {
+            kp: DEFAULT_GAINS.kp,
+            ki: DEFAULT_GAINS.ki,
+            integral_limit_n: None,
+        };
         for (name, slot) in [("kp", &mut gains.kp), ("ki", &mut gains.ki)] {
             if let Some(expr) = bound.get(name) {
                 if let Some(value) = self.plain_number(expr, &format!("the gain `{name}`")) {
                     if value < 0.0 {
                         let diag = self
-                            .diag(Code::NegativeGain, expr.span, format!("the gain `{name}` is negative"), "negative gain")
-                            .help("force gains are zero or positive; a negative gain pushes away from the desired force");
+                            .diag(
+                                Code::NegativeGain,
+                                expr.span,
+                                format!("the gain `{name}` is negative"),
+                                "negative gain",
+                            )
+                            .help(
+                                "force gains are zero or positive; a negative gain pushes away from the desired force",
+                            );
                         self.report(diag);
                     } else {
                         *slot = value;
@@ -1729,7 +2095,12 @@ impl<'a> Checker<'a> {
             if let Some(value) = self.quantity(expr, Dim::Force, "the integral limit") {
                 if value < 0.0 {
                     let diag = self
-                        .diag(Code::NegativeGain, expr.span, "the integral limit is negative", "negative limit")
+                        .diag(
+                            Code::NegativeGain,
+                            expr.span,
+                            "the integral limit is negative",
+                            "negative limit",
+                        )
                         .help("write a positive bound such as `limit: 10 N`");
                     self.report(diag);
                 } else {
@@ -1755,18 +2126,34 @@ impl<'a> Checker<'a> {
                         None
                     }
                 };
-                Some(ir::EntryAction::ShiftGoal { along: along?, distance_m: distance? })
+                Some(ir::EntryAction::ShiftGoal {
+                    along: along?,
+                    distance_m: distance?,
+                })
             }
             ExprKind::Name(name) | ExprKind::Call { name, .. } => {
                 let diag = self
-                    .diag(Code::UnknownFunction, name.span, format!("unknown entry action `{}`", name.name), "not an action")
-                    .help(suggest(&name.name, ACTIONS).unwrap_or_else(|| format!("entry actions are {}", join_ticked(&ACTIONS))));
+                    .diag(
+                        Code::UnknownFunction,
+                        name.span,
+                        format!("unknown entry action `{}`", name.name),
+                        "not an action",
+                    )
+                    .help(
+                        suggest(&name.name, ACTIONS)
+                            .unwrap_or_else(|| format!("entry actions are {}", join_ticked(&ACTIONS))),
+                    );
                 self.report(diag);
                 None
             }
             _ => {
                 let diag = self
-                    .diag(Code::BadArgument, expr.span, "not an entry action", "expected an action")
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        "not an entry action",
+                        "expected an action",
+                    )
                     .help(format!("entry actions are {}", join_ticked(&ACTIONS)));
                 self.report(diag);
                 None
@@ -1782,27 +2169,46 @@ impl<'a> Checker<'a> {
         scope: &mut SkillScope,
     ) -> Option<ir::TransitionAction> {
         match target {
-            ast::Target::State(name) => self.state_ref(name, ids, state_names).map(|target| ir::TransitionAction::Goto { target }),
-            ast::Target::Extend { axis, speed, max, then, .. } => {
+            ast::Target::State(name) => self
+                .state_ref(name, ids, state_names)
+                .map(|target| ir::TransitionAction::Goto { target }),
+            ast::Target::Extend {
+                axis, speed, max, then, ..
+            } => {
                 let along = self.frame_axis(axis, true, scope);
                 let speed_value = self.quantity(speed, Dim::Speed, "the extension speed");
                 let speed_mps = self.positive(speed_value, speed.span, "the extension speed");
                 let max_value = self.quantity(max, Dim::Length, "the extension bound");
                 let max_m = self.positive(max_value, max.span, "the extension bound");
                 let then = self.state_ref(then, ids, state_names);
-                Some(ir::TransitionAction::Extend { along: along?, speed_mps: speed_mps?, max_m: max_m?, then: then? })
+                Some(ir::TransitionAction::Extend {
+                    along: along?,
+                    speed_mps: speed_mps?,
+                    max_m: max_m?,
+                    then: then?,
+                })
             }
         }
     }
 
-    fn state_ref(&mut self, name: &ast::Ident, ids: &HashMap<&str, (ir::StateId, Span)>, state_names: &[&str]) -> Option<ir::StateId> {
+    fn state_ref(
+        &mut self,
+        name: &ast::Ident,
+        ids: &HashMap<&str, (ir::StateId, Span)>,
+        state_names: &[&str],
+    ) -> Option<ir::StateId> {
         if let Some((id, _)) = ids.get(name.name.as_str()) {
             return Some(*id);
         }
         let help = suggest(&name.name, state_names.iter().copied())
             .unwrap_or_else(|| format!("states: {}", join_ticked(state_names)));
         let diag = self
-            .diag(Code::UnknownName, name.span, format!("unknown state `{}`", name.name), "no state of this name")
+            .diag(
+                Code::UnknownName,
+                name.span,
+                format!("unknown state `{}`", name.name),
+                "no state of this name",
+            )
             .help(help);
         self.report(diag);
         None
@@ -1820,7 +2226,9 @@ impl<'a> Checker<'a> {
                     ir::Guard::And { all: resolved }
                 })
             }
-            GuardKind::Not(inner) => Some(ir::Guard::Not { guard: Box::new(self.guard(inner, scope)?) }),
+            GuardKind::Not(inner) => Some(ir::Guard::Not {
+                guard: Box::new(self.guard(inner, scope)?),
+            }),
             GuardKind::Force { axis, op, rhs } => {
                 let along = self.frame_axis(axis, false, scope);
                 let dim = match along {
@@ -1829,7 +2237,9 @@ impl<'a> Checker<'a> {
                 };
                 let rhs = match &rhs.kind {
                     ExprKind::Name(name) => self.threshold_ref(name, dim, scope),
-                    _ => self.quantity(rhs, dim, "the threshold").map(|value| ir::Threshold::Literal { value }),
+                    _ => self
+                        .quantity(rhs, dim, "the threshold")
+                        .map(|value| ir::Threshold::Literal { value }),
                 };
                 let op = match op {
                     ast::CmpOp::Ge => ir::Comparison::Ge,
@@ -1837,17 +2247,30 @@ impl<'a> Checker<'a> {
                     ast::CmpOp::Le => ir::Comparison::Le,
                     ast::CmpOp::Lt => ir::Comparison::Lt,
                 };
-                Some(ir::Guard::Force { along: along?, op, rhs: rhs? })
+                Some(ir::Guard::Force {
+                    along: along?,
+                    op,
+                    rhs: rhs?,
+                })
             }
             GuardKind::Timed { timeout, duration } => {
                 let what = if *timeout { "the timeout" } else { "the dwell time" };
                 let value = self.quantity(duration, Dim::Time, what)?;
                 if value < 0.0 {
-                    let diag = self.diag(Code::OutOfRange, duration.span, format!("{what} is negative"), "negative duration");
+                    let diag = self.diag(
+                        Code::OutOfRange,
+                        duration.span,
+                        format!("{what} is negative"),
+                        "negative duration",
+                    );
                     self.report(diag);
                     return None;
                 }
-                Some(if *timeout { ir::Guard::Timeout { duration_s: value } } else { ir::Guard::Dwell { duration_s: value } })
+                Some(if *timeout {
+                    ir::Guard::Timeout { duration_s: value }
+                } else {
+                    ir::Guard::Dwell { duration_s: value }
+                })
             }
             GuardKind::ForceReached(tolerance) => {
                 let value = self.quantity(tolerance, Dim::Force, "the force tolerance");
@@ -1862,11 +2285,25 @@ impl<'a> Checker<'a> {
                     "timeout" | "dwell" => format!("`{}` needs a duration: `{} 5 s`", name.name, name.name),
                     "force_reached" => "write `force_reached within 1 N`".to_string(),
                     "contact" => "contact is a force guard: `force(contact.z) >= touch`".to_string(),
-                    other => suggest(other, NAMED_GUARDS.iter().copied().chain(["timeout", "dwell", "force_reached"]))
-                        .unwrap_or_else(|| "guards are `motion_done`, `force(F.z) >= X`, `force_reached within X`, `timeout T`, `dwell T`".to_string()),
+                    other => suggest(
+                        other,
+                        NAMED_GUARDS
+                            .iter()
+                            .copied()
+                            .chain(["timeout", "dwell", "force_reached"]),
+                    )
+                    .unwrap_or_else(|| {
+                        "guards are `motion_done`, `force(F.z) >= X`, `force_reached within X`, `timeout T`, `dwell T`"
+                            .to_string()
+                    }),
                 };
                 let diag = self
-                    .diag(Code::UnknownGuard, name.span, format!("unknown guard `{}`", name.name), "not a guard")
+                    .diag(
+                        Code::UnknownGuard,
+                        name.span,
+                        format!("unknown guard `{}`", name.name),
+                        "not a guard",
+                    )
                     .help(help);
                 self.report(diag);
                 None
@@ -1878,16 +2315,25 @@ impl<'a> Checker<'a> {
         match scope.symbols.get_mut(&name.name) {
             Some(sym) if sym.kind == SymKind::Threshold => {
                 sym.used = true;
-                Some(ir::Threshold::Learned { id: ir::ThresholdId(sym.id) })
+                Some(ir::Threshold::Learned {
+                    id: ir::ThresholdId(sym.id),
+                })
             }
             Some(sym) if sym.kind == SymKind::Force => {
                 sym.used = true;
                 let (id, span) = (sym.id, sym.span);
                 match scope.force_sources.get(id as usize) {
-                    Some(ir::ForceSource::Constant { .. } | ir::ForceSource::At { .. } | ir::ForceSource::Literal { .. }) => {
+                    Some(
+                        ir::ForceSource::Constant { .. } | ir::ForceSource::At { .. } | ir::ForceSource::Literal { .. },
+                    ) => {
                         if dim == Dim::Torque {
                             let diag = self
-                                .diag(Code::UnitMismatch, name.span, format!("`{}` is a force; a rotation axis compares torques", name.name), "a force")
+                                .diag(
+                                    Code::UnitMismatch,
+                                    name.span,
+                                    format!("`{}` is a force; a rotation axis compares torques", name.name),
+                                    "a force",
+                                )
                                 .help("compare a rotation axis with a torque, like `0.5 Nm`");
                             self.report(diag);
                             return None;
@@ -1903,13 +2349,19 @@ impl<'a> Checker<'a> {
                                 "a profile, not a value",
                             )
                             .label(span, "declared here")
-                            .help("declare a threshold: `threshold touch = force_at(end(segment 1), along: contact.z)`");
+                            .help(
+                                "declare a threshold: `threshold touch = force_at(end(segment 1), along: contact.z)`",
+                            );
                         self.report(diag);
                         None
                     }
                 }
             }
-            _ => self.resolve(name, SymKind::Threshold, scope).map(|id| ir::Threshold::Learned { id: ir::ThresholdId(id) }),
+            _ => self
+                .resolve(name, SymKind::Threshold, scope)
+                .map(|id| ir::Threshold::Learned {
+                    id: ir::ThresholdId(id),
+                }),
         }
     }
 
@@ -1923,9 +2375,9 @@ impl<'a> Checker<'a> {
         has_force_axes: bool,
         scope: &SkillScope,
     ) {
-        let force_profile = force.and_then(|id| scope.force_sources.get(id.index())).is_some_and(|source| {
-            matches!(source, ir::ForceSource::Dmp { .. } | ir::ForceSource::Magnitude { .. })
-        });
+        let force_profile = force
+            .and_then(|id| scope.force_sources.get(id.index()))
+            .is_some_and(|source| matches!(source, ir::ForceSource::Dmp { .. } | ir::ForceSource::Magnitude { .. }));
         for (index, (transition, guard, _)) in transitions.iter().enumerate() {
             // Atoms that cannot hold in this state.
             if let Some(reason) = impossible_atom(&transition.guard, has_motion || force_profile, has_force_axes) {
@@ -1937,7 +2389,12 @@ impl<'a> Checker<'a> {
             }
             if unsatisfiable(&transition.guard) {
                 let diag = self
-                    .diag(Code::NeverFires, guard.span, "this transition can never fire", "this guard contradicts itself")
+                    .diag(
+                        Code::NeverFires,
+                        guard.span,
+                        "this transition can never fire",
+                        "this guard contradicts itself",
+                    )
                     .help("remove the contradicting condition");
                 self.report(diag);
                 continue;
@@ -1945,7 +2402,12 @@ impl<'a> Checker<'a> {
             for (earlier, earlier_guard, _) in &transitions[..index] {
                 if earlier.guard == transition.guard {
                     let diag = self
-                        .diag(Code::DuplicateGuard, guard.span, "this guard repeats an earlier one", "same guard")
+                        .diag(
+                            Code::DuplicateGuard,
+                            guard.span,
+                            "this guard repeats an earlier one",
+                            "same guard",
+                        )
                         .label(earlier_guard.span, "first written here; it always fires first")
                         .help("remove one of the two transitions");
                     self.report(diag);
@@ -1966,8 +2428,10 @@ impl<'a> Checker<'a> {
                 }
             }
         }
-        let all_force_only =
-            !transitions.is_empty() && transitions.iter().all(|(transition, _, _)| only_force_atoms(&transition.guard));
+        let all_force_only = !transitions.is_empty()
+            && transitions
+                .iter()
+                .all(|(transition, _, _)| only_force_atoms(&transition.guard));
         if all_force_only {
             let diag = self
                 .diag(
@@ -2020,7 +2484,9 @@ impl<'a> Checker<'a> {
                         format!("state `{}` can never be reached", state.name.name),
                         "no transition leads here",
                     )
-                    .help(format!("add a transition to it, or remove it; the skill starts in `{initial_name}`"));
+                    .help(format!(
+                        "add a transition to it, or remove it; the skill starts in `{initial_name}`"
+                    ));
                 self.report(diag);
                 continue;
             }
@@ -2077,7 +2543,12 @@ impl<'a> Checker<'a> {
         for step in &task.steps {
             if let Some((earlier, _)) = names.get(step.name.name.as_str()) {
                 let diag = self
-                    .diag(Code::DuplicateName, step.name.span, format!("step `{}` is declared twice", step.name.name), "second declaration")
+                    .diag(
+                        Code::DuplicateName,
+                        step.name.span,
+                        format!("step `{}` is declared twice", step.name.name),
+                        "second declaration",
+                    )
                     .label(*earlier, "first declared here")
                     .help("rename one of them");
                 self.report(diag);
@@ -2091,7 +2562,12 @@ impl<'a> Checker<'a> {
         }
         if !task.steps.iter().any(|step| !step.fallback) {
             let diag = self
-                .diag(Code::NoStates, task.name.span, format!("task `{}` has no step", task.name.name), "nothing to run")
+                .diag(
+                    Code::NoStates,
+                    task.name.span,
+                    format!("task `{}` has no step", task.name.name),
+                    "nothing to run",
+                )
                 .help("add `step NAME = SKILL(demo: \"demo.csv\")`");
             self.report(diag);
         }
@@ -2103,30 +2579,58 @@ impl<'a> Checker<'a> {
                     if skills.is_empty() {
                         "no skill is in scope: `import \"path/to/skill.skill\"`".to_string()
                     } else {
-                        format!("skills in scope: {}; import others with `import \"path.skill\"`", join_ticked(skills))
+                        format!(
+                            "skills in scope: {}; import others with `import \"path.skill\"`",
+                            join_ticked(skills)
+                        )
                     }
                 });
                 let diag = self
-                    .diag(Code::UnknownName, step.skill.span, format!("unknown skill `{}`", step.skill.name), "no skill of this name")
+                    .diag(
+                        Code::UnknownName,
+                        step.skill.span,
+                        format!("unknown skill `{}`", step.skill.name),
+                        "no skill of this name",
+                    )
                     .help(help);
                 self.report(diag);
             }
-            let bound = self.bind_args(&step.skill.name, &step.args, &["demo", "learned", "force_scale", "speed", "goal_offset"], 0);
+            let bound = self.bind_args(
+                &step.skill.name,
+                &step.args,
+                &["demo", "learned", "force_scale", "speed", "goal_offset"],
+                0,
+            );
             let input = match (bound.get("demo"), bound.get("learned")) {
-                (Some(demo), None) => self.string(demo, "`demo`").map(|path| ir::StepInput::Demo(join_path(base_dir, &path))),
-                (None, Some(learned)) => {
-                    self.string(learned, "`learned`").map(|path| ir::StepInput::Learned(join_path(base_dir, &path)))
-                }
+                (Some(demo), None) => self
+                    .string(demo, "`demo`")
+                    .map(|path| ir::StepInput::Demo(join_path(base_dir, &path))),
+                (None, Some(learned)) => self
+                    .string(learned, "`learned`")
+                    .map(|path| ir::StepInput::Learned(join_path(base_dir, &path))),
                 (Some(_), Some(learned)) => {
                     let diag = self
-                        .diag(Code::BadArgument, learned.span, "a step takes `demo` or `learned`, not both", "second source")
+                        .diag(
+                            Code::BadArgument,
+                            learned.span,
+                            "a step takes `demo` or `learned`, not both",
+                            "second source",
+                        )
                         .help("give the demonstration to learn from, or the file already learned");
                     self.report(diag);
                     None
                 }
                 (None, None) => {
                     let span = step.span;
-                    self.missing_arg(&step.skill.name, "demo", span, &format!("{}(demo: \"demos/{}.csv\")` or `learned: \"....json\"", step.skill.name, step.skill.name));
+                    self.missing_arg(
+                        &step.skill.name,
+                        "demo",
+                        span,
+                        &format!(
+                            "{}(demo: \"demos/{}.csv\")` or `learned: \"....json\"",
+                            step.skill.name, step.skill.name
+                        ),
+                    );
                     None
                 }
             };
@@ -2150,27 +2654,40 @@ impl<'a> Checker<'a> {
             }
             let on_failure = match &step.on_failure {
                 None | Some(ast::OnFailure::Abort(_)) => Some(ir::OnFailure::Abort),
-                Some(ast::OnFailure::Fallback(name)) => match (fallback_index.get(name.name.as_str()), names.get(name.name.as_str())) {
-                    (Some(index), _) => Some(ir::OnFailure::Fallback(*index)),
-                    (None, Some((span, _))) => {
-                        let diag = self
-                            .diag(Code::WrongKind, name.span, format!("`{}` is a step, not a fallback", name.name), "not a fallback")
-                            .label(*span, "declared as a step here")
-                            .help(format!("declare it with `fallback {} = ...`", name.name));
-                        self.report(diag);
-                        None
+                Some(ast::OnFailure::Fallback(name)) => {
+                    match (fallback_index.get(name.name.as_str()), names.get(name.name.as_str())) {
+                        (Some(index), _) => Some(ir::OnFailure::Fallback(*index)),
+                        (None, Some((span, _))) => {
+                            let diag = self
+                                .diag(
+                                    Code::WrongKind,
+                                    name.span,
+                                    format!("`{}` is a step, not a fallback", name.name),
+                                    "not a fallback",
+                                )
+                                .label(*span, "declared as a step here")
+                                .help(format!("declare it with `fallback {} = ...`", name.name));
+                            self.report(diag);
+                            None
+                        }
+                        (None, None) => {
+                            let fallback_names: Vec<&str> = fallback_index.keys().copied().collect();
+                            let help = suggest(&name.name, fallback_names.iter().copied()).unwrap_or_else(|| {
+                                format!("declare it: `fallback {} = SKILL(demo: \"...\")`", name.name)
+                            });
+                            let diag = self
+                                .diag(
+                                    Code::UnknownName,
+                                    name.span,
+                                    format!("unknown fallback `{}`", name.name),
+                                    "no fallback of this name",
+                                )
+                                .help(help);
+                            self.report(diag);
+                            None
+                        }
                     }
-                    (None, None) => {
-                        let fallback_names: Vec<&str> = fallback_index.keys().copied().collect();
-                        let help = suggest(&name.name, fallback_names.iter().copied())
-                            .unwrap_or_else(|| format!("declare it: `fallback {} = SKILL(demo: \"...\")`", name.name));
-                        let diag = self
-                            .diag(Code::UnknownName, name.span, format!("unknown fallback `{}`", name.name), "no fallback of this name")
-                            .help(help);
-                        self.report(diag);
-                        None
-                    }
-                },
+                }
             };
             if let (Some(input), Some(on_failure)) = (input, on_failure) {
                 let lowered = ir::Step {
@@ -2237,7 +2754,11 @@ fn kind_noun(kind: SymKind) -> &'static str {
 }
 
 fn join_ticked(items: &[&str]) -> String {
-    items.iter().map(|item| format!("`{item}`")).collect::<Vec<_>>().join(", ")
+    items
+        .iter()
+        .map(|item| format!("`{item}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn example_quantity(dim: Dim) -> String {
@@ -2273,10 +2794,21 @@ fn atom_implies(a: &ir::Guard, b: &ir::Guard) -> bool {
     }
     match (a, b) {
         (_, Dwell { duration_s } | Timeout { duration_s }) if *duration_s == 0.0 => true,
-        (Dwell { duration_s: da } | Timeout { duration_s: da }, Dwell { duration_s: db } | Timeout { duration_s: db }) => da >= db,
         (
-            Force { along: la, op: oa, rhs: ir::Threshold::Literal { value: va } },
-            Force { along: lb, op: ob, rhs: ir::Threshold::Literal { value: vb } },
+            Dwell { duration_s: da } | Timeout { duration_s: da },
+            Dwell { duration_s: db } | Timeout { duration_s: db },
+        ) => da >= db,
+        (
+            Force {
+                along: la,
+                op: oa,
+                rhs: ir::Threshold::Literal { value: va },
+            },
+            Force {
+                along: lb,
+                op: ob,
+                rhs: ir::Threshold::Literal { value: vb },
+            },
         ) if la == lb => {
             use ir::Comparison::*;
             match (oa, ob) {
@@ -2297,7 +2829,9 @@ fn atom_implies(a: &ir::Guard, b: &ir::Guard) -> bool {
 /// some atom of `later`. Disjunctions and negations are compared only for equality.
 fn implies(later: &ir::Guard, earlier: &ir::Guard) -> bool {
     let later_atoms = conjuncts(later);
-    conjuncts(earlier).iter().all(|needed| later_atoms.iter().any(|have| atom_implies(have, needed)))
+    conjuncts(earlier)
+        .iter()
+        .all(|needed| later_atoms.iter().any(|have| atom_implies(have, needed)))
 }
 
 /// Whether a conjunction contradicts itself: `a and not a`, or disjoint literal force bounds.
@@ -2316,17 +2850,26 @@ fn unsatisfiable(guard: &ir::Guard) -> bool {
                 }
             }
             if let (
-                ir::Guard::Force { along: la, op: oa, rhs: ir::Threshold::Literal { value: va } },
-                ir::Guard::Force { along: lb, op: ob, rhs: ir::Threshold::Literal { value: vb } },
+                ir::Guard::Force {
+                    along: la,
+                    op: oa,
+                    rhs: ir::Threshold::Literal { value: va },
+                },
+                ir::Guard::Force {
+                    along: lb,
+                    op: ob,
+                    rhs: ir::Threshold::Literal { value: vb },
+                },
             ) = (a, b)
             {
                 if la == lb {
                     use ir::Comparison::*;
-                    let lower_upper = |lo_op: ir::Comparison, lo: f64, hi_op: ir::Comparison, hi: f64| match (lo_op, hi_op) {
-                        (Ge, Le) => lo > hi,
-                        (Ge | Gt, Le | Lt) => lo >= hi,
-                        _ => false,
-                    };
+                    let lower_upper =
+                        |lo_op: ir::Comparison, lo: f64, hi_op: ir::Comparison, hi: f64| match (lo_op, hi_op) {
+                            (Ge, Le) => lo > hi,
+                            (Ge | Gt, Le | Lt) => lo >= hi,
+                            _ => false,
+                        };
                     if matches!(oa, Ge | Gt) && matches!(ob, Le | Lt) && lower_upper(*oa, *va, *ob, *vb) {
                         return true;
                     }
@@ -2401,7 +2944,9 @@ mod tests {
         let long = ir::Guard::Dwell { duration_s: 2.0 };
         assert!(implies(&long, &short));
         assert!(!implies(&short, &long));
-        let both = ir::Guard::And { all: vec![ir::Guard::MotionDone, long.clone()] };
+        let both = ir::Guard::And {
+            all: vec![ir::Guard::MotionDone, long.clone()],
+        };
         assert!(implies(&both, &short));
         assert!(!implies(&short, &both));
     }

@@ -169,7 +169,10 @@ impl Diag {
             code,
             file,
             message: message.into(),
-            labels: vec![Label { span, text: label.into() }],
+            labels: vec![Label {
+                span,
+                text: label.into(),
+            }],
             help: None,
         }
     }
@@ -188,7 +191,10 @@ impl Diag {
 
     /// Adds a secondary label.
     pub fn label(mut self, span: Span, text: impl Into<String>) -> Self {
-        self.labels.push(Label { span, text: text.into() });
+        self.labels.push(Label {
+            span,
+            text: text.into(),
+        });
         self
     }
 
@@ -204,7 +210,10 @@ impl Diag {
 
     /// Pairs the diagnostic with its source so that miette can render it.
     pub fn with_source<'a>(&'a self, source: &'a SourceFile) -> Rendered<'a> {
-        Rendered { diag: self, source: miette::NamedSource::new(source.name.clone(), source.text.clone()) }
+        Rendered {
+            diag: self,
+            source: miette::NamedSource::new(source.name.clone(), source.text.clone()),
+        }
     }
 }
 
@@ -236,7 +245,10 @@ impl miette::Diagnostic for Rendered<'_> {
     }
 
     fn help<'a>(&'a self) -> Option<Box<dyn fmt::Display + 'a>> {
-        self.diag.help.as_ref().map(|help| Box::new(help) as Box<dyn fmt::Display>)
+        self.diag
+            .help
+            .as_ref()
+            .map(|help| Box::new(help) as Box<dyn fmt::Display>)
     }
 
     fn source_code(&self) -> Option<&dyn miette::SourceCode> {

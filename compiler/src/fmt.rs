@@ -16,7 +16,14 @@ struct Comment {
 
 /// Formats a parsed file. `src` must be the text `file` was parsed from.
 pub fn format(src: &SourceFile, file: &File) -> String {
-    let mut printer = Printer { src, comments: line_comments(&src.text), next_comment: 0, out: String::new(), depth: 0, last_end: 0 };
+    let mut printer = Printer {
+        src,
+        comments: line_comments(&src.text),
+        next_comment: 0,
+        out: String::new(),
+        depth: 0,
+        last_end: 0,
+    };
     let mut items: Vec<(Span, Item<'_>)> = Vec::new();
     items.extend(file.imports.iter().map(|import| (import.span, Item::Import(import))));
     items.extend(file.skills.iter().map(|skill| (skill.span, Item::Skill(skill))));
@@ -241,7 +248,12 @@ impl Printer<'_> {
         for step in &task.steps {
             self.docs(step.span.start, &step.doc);
             let keyword = if step.fallback { "fallback" } else { "step" };
-            let mut text = format!("{keyword} {} = {}({})", step.name.name, step.skill.name, args(&step.args));
+            let mut text = format!(
+                "{keyword} {} = {}({})",
+                step.name.name,
+                step.skill.name,
+                args(&step.args)
+            );
             match &step.on_failure {
                 Some(OnFailure::Abort(_)) => text.push_str(" on failure abort"),
                 Some(OnFailure::Fallback(name)) => text.push_str(&format!(" on failure -> {}", name.name)),
@@ -260,7 +272,13 @@ fn statement(stmt: &StmtKind) -> String {
         StmtKind::Control { groups, frame } => {
             let groups: Vec<String> = groups
                 .iter()
-                .map(|group| format!("{} {}", if group.force { "force" } else { "position" }, axis_set(&group.axes)))
+                .map(|group| {
+                    format!(
+                        "{} {}",
+                        if group.force { "force" } else { "position" },
+                        axis_set(&group.axes)
+                    )
+                })
                 .collect();
             let mut text = format!("control {}", groups.join(", "));
             if let Some(frame) = frame {
@@ -270,8 +288,10 @@ fn statement(stmt: &StmtKind) -> String {
             text
         }
         StmtKind::Stiffness(values) => {
-            let values: Vec<String> =
-                values.iter().map(|value| format!("{}: {}", axis_set(&value.axes), expr(&value.value))).collect();
+            let values: Vec<String> = values
+                .iter()
+                .map(|value| format!("{}: {}", axis_set(&value.axes), expr(&value.value)))
+                .collect();
             format!("stiffness {}", values.join(", "))
         }
         StmtKind::Apply(name) => format!("apply {}", name.name),
@@ -283,7 +303,9 @@ fn statement(stmt: &StmtKind) -> String {
         StmtKind::Transition { guard: g, target } => {
             let target = match target {
                 Target::State(name) => name.name.clone(),
-                Target::Extend { axis, speed, max, then, .. } => format!(
+                Target::Extend {
+                    axis, speed, max, then, ..
+                } => format!(
                     "extend along {}.{} at {}, up to {}, then {}",
                     axis.frame.name,
                     axis.axis.name,
@@ -321,7 +343,13 @@ pub fn guard(g: &Guard) -> String {
             _ => format!("not {}", guard(inner)),
         },
         GuardKind::Force { axis, op, rhs } => {
-            format!("force({}.{}) {} {}", axis.frame.name, axis.axis.name, op.as_str(), expr(rhs))
+            format!(
+                "force({}.{}) {} {}",
+                axis.frame.name,
+                axis.axis.name,
+                op.as_str(),
+                expr(rhs)
+            )
         }
         GuardKind::Timed { timeout, duration } => {
             format!("{} {}", if *timeout { "timeout" } else { "dwell" }, expr(duration))

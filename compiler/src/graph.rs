@@ -26,10 +26,17 @@ fn edges(skill: &ir::Skill) -> Vec<Edge<'_>> {
     for transition in &skill.transitions {
         let from = name(transition.from);
         match &transition.action {
-            ir::TransitionAction::Goto { target } => {
-                out.push(Edge { from, to: name(*target), label: transition.guard_text.clone() })
-            }
-            ir::TransitionAction::Extend { along, speed_mps, max_m, then } => {
+            ir::TransitionAction::Goto { target } => out.push(Edge {
+                from,
+                to: name(*target),
+                label: transition.guard_text.clone(),
+            }),
+            ir::TransitionAction::Extend {
+                along,
+                speed_mps,
+                max_m,
+                then,
+            } => {
                 out.push(Edge {
                     from,
                     to: from,
@@ -44,7 +51,11 @@ fn edges(skill: &ir::Skill) -> Vec<Edge<'_>> {
                 out.push(Edge {
                     from,
                     to: name(*then),
-                    label: format!("{} after {} mm of extension", transition.guard_text, trim(max_m * 1000.0)),
+                    label: format!(
+                        "{} after {} mm of extension",
+                        transition.guard_text,
+                        trim(max_m * 1000.0)
+                    ),
                 });
             }
         }
@@ -150,7 +161,13 @@ fn dot(program: &ir::Program) -> String {
         let initial = &skill.states[skill.initial.index()].name;
         let _ = writeln!(out, "        \"{}.__start\" -> {};", skill.name, id(initial));
         for edge in edges(skill) {
-            let _ = writeln!(out, "        {} -> {} [label=\"{}\"];", id(edge.from), id(edge.to), escape_dot(&edge.label));
+            let _ = writeln!(
+                out,
+                "        {} -> {} [label=\"{}\"];",
+                id(edge.from),
+                id(edge.to),
+                escape_dot(&edge.label)
+            );
         }
         let _ = writeln!(out, "    }}");
     }
@@ -168,7 +185,11 @@ fn dot(program: &ir::Program) -> String {
             );
         }
         for pair in task.steps.windows(2) {
-            let _ = writeln!(out, "        \"{}/{}\" -> \"{}/{}\" [label=\"success\"];", task.name, pair[0].name, task.name, pair[1].name);
+            let _ = writeln!(
+                out,
+                "        \"{}/{}\" -> \"{}/{}\" [label=\"success\"];",
+                task.name, pair[0].name, task.name, pair[1].name
+            );
         }
         for step in &task.steps {
             if let ir::OnFailure::Fallback(index) = step.on_failure {
@@ -204,7 +225,12 @@ fn mermaid(program: &ir::Program) -> String {
                     }
                 ),
             };
-            let _ = writeln!(out, "        state \"{}\" as {}", escape_mermaid(&label), mermaid_id(skill, &state.name));
+            let _ = writeln!(
+                out,
+                "        state \"{}\" as {}",
+                escape_mermaid(&label),
+                mermaid_id(skill, &state.name)
+            );
         }
         let initial = &skill.states[skill.initial.index()].name;
         let _ = writeln!(out, "        [*] --> {}", mermaid_id(skill, initial));
@@ -231,10 +257,21 @@ fn mermaid(program: &ir::Program) -> String {
             let _ = writeln!(out, "        [*] --> {}", step_id(&first.name));
         }
         for step in task.steps.iter().chain(&task.fallbacks) {
-            let _ = writeln!(out, "        state \"{} ({})\" as {}", step.name, step.skill, step_id(&step.name));
+            let _ = writeln!(
+                out,
+                "        state \"{} ({})\" as {}",
+                step.name,
+                step.skill,
+                step_id(&step.name)
+            );
         }
         for pair in task.steps.windows(2) {
-            let _ = writeln!(out, "        {} --> {} : success", step_id(&pair[0].name), step_id(&pair[1].name));
+            let _ = writeln!(
+                out,
+                "        {} --> {} : success",
+                step_id(&pair[0].name),
+                step_id(&pair[1].name)
+            );
         }
         if let Some(last) = task.steps.last() {
             let _ = writeln!(out, "        {} --> [*] : success", step_id(&last.name));
@@ -242,7 +279,12 @@ fn mermaid(program: &ir::Program) -> String {
         for step in &task.steps {
             if let ir::OnFailure::Fallback(index) = step.on_failure {
                 if let Some(fallback) = task.fallbacks.get(index as usize) {
-                    let _ = writeln!(out, "        {} --> {} : failure", step_id(&step.name), step_id(&fallback.name));
+                    let _ = writeln!(
+                        out,
+                        "        {} --> {} : failure",
+                        step_id(&step.name),
+                        step_id(&fallback.name)
+                    );
                 }
             }
         }

@@ -60,7 +60,9 @@ pub struct LoadError {
 /// Compiles a file that imports nothing (imports are reported as missing).
 pub fn compile_str(name: &str, text: &str) -> Compilation {
     compile(SourceFile::new(name, text), &mut |_path: &str| {
-        Err(LoadError { reason: "imports are not available here".to_string() })
+        Err(LoadError {
+            reason: "imports are not available here".to_string(),
+        })
     })
 }
 
@@ -97,9 +99,13 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
                         "second definition",
                     );
                     duplicates.push(if earlier_file == file {
-                        diag.label(earlier_span, "first defined here").help("rename one of them")
+                        diag.label(earlier_span, "first defined here")
+                            .help("rename one of them")
                     } else {
-                        diag.help(format!("it is also defined in `{}`; rename one of them", files[earlier_file].name))
+                        diag.help(format!(
+                            "it is also defined in `{}`; rename one of them",
+                            files[earlier_file].name
+                        ))
                     });
                 }
                 None => {
@@ -139,7 +145,12 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
         tasks,
     });
     let root_ast = asts.swap_remove(0);
-    Compilation { files, diags, ast: root_ast, program }
+    Compilation {
+        files,
+        diags,
+        ast: root_ast,
+        program,
+    }
 }
 
 fn load_imports(

@@ -125,9 +125,36 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
 
 /// Words the grammar reserves (they may not be names); keep in step with `keyword` in skill.pest.
 const KEYWORDS: &[&str] = &[
-    "skill", "state", "learn", "terminal", "task", "step", "fallback", "import", "on", "in", "and", "or", "not",
-    "then", "at", "up", "to", "along", "expect", "from", "within", "control", "move", "apply",
-    "stiffness", "gains", "entry", "extend", "segment", "all",
+    "skill",
+    "state",
+    "learn",
+    "terminal",
+    "task",
+    "step",
+    "fallback",
+    "import",
+    "on",
+    "in",
+    "and",
+    "or",
+    "not",
+    "then",
+    "at",
+    "up",
+    "to",
+    "along",
+    "expect",
+    "from",
+    "within",
+    "control",
+    "move",
+    "apply",
+    "stiffness",
+    "gains",
+    "entry",
+    "extend",
+    "segment",
+    "all",
 ];
 
 fn join_or(items: &[&str]) -> String {
@@ -209,11 +236,17 @@ fn file_rule(pair: Pair<'_, Rule>) -> File {
 
 fn import(pair: Pair<'_, Rule>) -> Import {
     let string_pair = pair.into_inner().next().expect("grammar: import has a string");
-    Import { span: span_of(&string_pair), path: string(string_pair) }
+    Import {
+        span: span_of(&string_pair),
+        path: string(string_pair),
+    }
 }
 
 fn ident(pair: Pair<'_, Rule>) -> Ident {
-    Ident { name: pair.as_str().to_string(), span: span_of(&pair) }
+    Ident {
+        name: pair.as_str().to_string(),
+        span: span_of(&pair),
+    }
 }
 
 fn doc_text(pair: Pair<'_, Rule>) -> String {
@@ -237,7 +270,13 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
             rule => unreachable!("grammar: unexpected {rule:?} in skill"),
         }
     }
-    Skill { doc, name: name.expect("grammar: skill has a name"), learn, states, span }
+    Skill {
+        doc,
+        name: name.expect("grammar: skill has a name"),
+        learn,
+        states,
+        span,
+    }
 }
 
 fn learn_entry(pair: Pair<'_, Rule>) -> LearnDecl {
@@ -284,7 +323,14 @@ fn learn_entry(pair: Pair<'_, Rule>) -> LearnDecl {
             _ => value = Some(expr(part)),
         }
     }
-    LearnDecl { doc, kind, name, value: value.expect("grammar: learn declaration has a value"), expect, span }
+    LearnDecl {
+        doc,
+        kind,
+        name,
+        value: value.expect("grammar: learn declaration has a value"),
+        expect,
+        span,
+    }
 }
 
 fn parse_integer(text: &str) -> u64 {
@@ -305,7 +351,12 @@ fn state(pair: Pair<'_, Rule>) -> State {
             rule => unreachable!("grammar: unexpected {rule:?} in state"),
         }
     }
-    State { doc, name: name.expect("grammar: state has a name"), body: StateBody::Active(body), span }
+    State {
+        doc,
+        name: name.expect("grammar: state has a name"),
+        body: StateBody::Active(body),
+        span,
+    }
 }
 
 fn terminal(pair: Pair<'_, Rule>) -> State {
@@ -324,7 +375,12 @@ fn terminal(pair: Pair<'_, Rule>) -> State {
     let mut idents = idents.into_iter();
     let name = idents.next().expect("grammar: terminal has a name");
     let outcome = idents.next().expect("grammar: terminal has an outcome");
-    State { doc, name, body: StateBody::Terminal { outcome, message }, span }
+    State {
+        doc,
+        name,
+        body: StateBody::Terminal { outcome, message },
+        span,
+    }
 }
 
 fn stmt(pair: Pair<'_, Rule>) -> Stmt {
@@ -343,7 +399,10 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
     let kind = match rule {
         Rule::move_stmt => {
             let motion = ident(inner.next().expect("grammar: move names a motion"));
-            StmtKind::Move { motion, from_current: inner.next().is_some() }
+            StmtKind::Move {
+                motion,
+                from_current: inner.next().is_some(),
+            }
         }
         Rule::control_stmt => {
             let mut groups = Vec::new();
@@ -364,7 +423,10 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
         Rule::transition => {
             let guard_pair = inner.next().expect("grammar: transition has a guard");
             let target_pair = inner.next().expect("grammar: transition has a target");
-            StmtKind::Transition { guard: guard(guard_pair), target: target(target_pair) }
+            StmtKind::Transition {
+                guard: guard(guard_pair),
+                target: target(target_pair),
+            }
         }
         rule => unreachable!("grammar: unexpected {rule:?} in state"),
     };
@@ -375,12 +437,20 @@ fn control_group(pair: Pair<'_, Rule>) -> ControlGroup {
     let mut inner = pair.into_inner();
     let mode = inner.next().expect("grammar: control group has a mode");
     let axes = axis_set(inner.next().expect("grammar: control group has axes"));
-    ControlGroup { force: mode.as_str() == "force", mode_span: span_of(&mode), axes }
+    ControlGroup {
+        force: mode.as_str() == "force",
+        mode_span: span_of(&mode),
+        axes,
+    }
 }
 
 fn axis_set(pair: Pair<'_, Rule>) -> AxisSet {
     let span = span_of(&pair);
-    let idents: Vec<Ident> = pair.into_inner().filter(|p| p.as_rule() == Rule::ident).map(ident).collect();
+    let idents: Vec<Ident> = pair
+        .into_inner()
+        .filter(|p| p.as_rule() == Rule::ident)
+        .map(ident)
+        .collect();
     if idents.is_empty() {
         AxisSet::All(span)
     } else {
@@ -405,7 +475,13 @@ fn target(pair: Pair<'_, Rule>) -> Target {
             let speed = expr(inner.next().expect("grammar: extend has a speed"));
             let max = expr(inner.next().expect("grammar: extend has a bound"));
             let then = ident(inner.next().expect("grammar: extend has a then state"));
-            Target::Extend { axis, speed, max, then, span }
+            Target::Extend {
+                axis,
+                speed,
+                max,
+                then,
+                span,
+            }
         }
         rule => unreachable!("grammar: unexpected {rule:?} as target"),
     }
@@ -429,14 +505,24 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
             if parts.len() == 1 {
                 return parts.pop().expect("one part");
             }
-            Guard { kind: if is_or { GuardKind::Or(parts) } else { GuardKind::And(parts) }, span }
+            Guard {
+                kind: if is_or {
+                    GuardKind::Or(parts)
+                } else {
+                    GuardKind::And(parts)
+                },
+                span,
+            }
         }
         Rule::guard_not => {
             let mut inner = pair.into_inner();
             let first = inner.next().expect("grammar: guard_not is not empty");
             if first.as_rule() == Rule::not_kw {
                 let negated = guard(inner.next().expect("grammar: not has an operand"));
-                Guard { kind: GuardKind::Not(Box::new(negated)), span }
+                Guard {
+                    kind: GuardKind::Not(Box::new(negated)),
+                    span,
+                }
             } else {
                 guard(first)
             }
@@ -451,21 +537,37 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
                 _ => CmpOp::Lt,
             };
             let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
-            Guard { kind: GuardKind::Force { axis, op, rhs }, span }
+            Guard {
+                kind: GuardKind::Force { axis, op, rhs },
+                span,
+            }
         }
         Rule::timed => {
             let mut inner = pair.into_inner();
             let timeout = inner.next().expect("grammar: timed keyword").as_str() == "timeout";
             let duration = expr(inner.next().expect("grammar: timed has a duration"));
-            Guard { kind: GuardKind::Timed { timeout, duration }, span }
+            Guard {
+                kind: GuardKind::Timed { timeout, duration },
+                span,
+            }
         }
         Rule::reached => {
-            let tolerance = expr(pair.into_inner().next().expect("grammar: force_reached has a tolerance"));
-            Guard { kind: GuardKind::ForceReached(tolerance), span }
+            let tolerance = expr(
+                pair.into_inner()
+                    .next()
+                    .expect("grammar: force_reached has a tolerance"),
+            );
+            Guard {
+                kind: GuardKind::ForceReached(tolerance),
+                span,
+            }
         }
         Rule::named_guard => {
             let name = ident(pair.into_inner().next().expect("grammar: named guard has a name"));
-            Guard { kind: GuardKind::Named(name), span }
+            Guard {
+                kind: GuardKind::Named(name),
+                span,
+            }
         }
         rule => unreachable!("grammar: unexpected {rule:?} in guard"),
     }
@@ -484,7 +586,12 @@ fn task(pair: Pair<'_, Rule>) -> Task {
             rule => unreachable!("grammar: unexpected {rule:?} in task"),
         }
     }
-    Task { doc, name: name.expect("grammar: task has a name"), steps, span }
+    Task {
+        doc,
+        name: name.expect("grammar: task has a name"),
+        steps,
+        span,
+    }
 }
 
 fn step(pair: Pair<'_, Rule>) -> Step {
@@ -512,7 +619,15 @@ fn step(pair: Pair<'_, Rule>) -> Step {
             _ => OnFailure::Fallback(ident(part)),
         }
     });
-    Step { doc, fallback, name, skill, args, on_failure, span }
+    Step {
+        doc,
+        fallback,
+        name,
+        skill,
+        args,
+        on_failure,
+        span,
+    }
 }
 
 fn arg(pair: Pair<'_, Rule>) -> Arg {
@@ -525,7 +640,11 @@ fn arg(pair: Pair<'_, Rule>) -> Arg {
             _ => value = Some(expr(inner)),
         }
     }
-    Arg { key, value: value.expect("grammar: argument has a value"), span }
+    Arg {
+        key,
+        value: value.expect("grammar: argument has a value"),
+        span,
+    }
 }
 
 fn axis_ref(pair: Pair<'_, Rule>) -> AxisRef {
@@ -569,7 +688,10 @@ fn expr(pair: Pair<'_, Rule>) -> Expr {
             let mut inner = pair.into_inner();
             let number_pair = inner.next().expect("grammar: quantity has a number");
             let unit = ident(inner.next().expect("grammar: quantity has a unit"));
-            ExprKind::Quantity { number: number(number_pair), unit }
+            ExprKind::Quantity {
+                number: number(number_pair),
+                unit,
+            }
         }
         Rule::number => ExprKind::Number(number(pair)),
         Rule::string => ExprKind::Str(string(pair)),
@@ -581,7 +703,10 @@ fn expr(pair: Pair<'_, Rule>) -> Expr {
         Rule::call => {
             let mut inner = pair.into_inner();
             let name = ident(inner.next().expect("grammar: call has a name"));
-            ExprKind::Call { name, args: inner.map(arg).collect() }
+            ExprKind::Call {
+                name,
+                args: inner.map(arg).collect(),
+            }
         }
         Rule::axis_ref => ExprKind::Axis(axis_ref(pair)),
         Rule::ident => ExprKind::Name(ident(pair)),

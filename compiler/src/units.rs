@@ -95,12 +95,19 @@ pub const UNITS: &[(&str, Dim, f64)] = &[
 
 /// The dimension and SI factor of a unit name.
 pub fn lookup(unit: &str) -> Option<(Dim, f64)> {
-    UNITS.iter().find(|(name, _, _)| *name == unit).map(|&(_, dim, factor)| (dim, factor))
+    UNITS
+        .iter()
+        .find(|(name, _, _)| *name == unit)
+        .map(|&(_, dim, factor)| (dim, factor))
 }
 
 /// The units of one dimension, for help lines.
 pub fn units_of(dim: Dim) -> Vec<&'static str> {
-    UNITS.iter().filter(|(_, d, _)| *d == dim).map(|(name, _, _)| *name).collect()
+    UNITS
+        .iter()
+        .filter(|(_, d, _)| *d == dim)
+        .map(|(name, _, _)| *name)
+        .collect()
 }
 
 #[cfg(test)]

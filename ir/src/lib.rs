@@ -193,7 +193,11 @@ pub struct SegmentFeatures {
 
 impl Default for SegmentFeatures {
     fn default() -> Self {
-        SegmentFeatures { position: true, force: true, force_magnitude: false }
+        SegmentFeatures {
+            position: true,
+            force: true,
+            force_magnitude: false,
+        }
     }
 }
 
@@ -771,7 +775,11 @@ pub struct Overrides {
 
 impl Default for Overrides {
     fn default() -> Self {
-        Overrides { force_scale: 1.0, speed_factor: 1.0, goal_offset_m: [0.0; 3] }
+        Overrides {
+            force_scale: 1.0,
+            speed_factor: 1.0,
+            goal_offset_m: [0.0; 3],
+        }
     }
 }
 

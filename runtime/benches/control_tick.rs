@@ -10,7 +10,8 @@ use std::hint::black_box;
 fn controller_tick(c: &mut Criterion) {
     let robot = Robot::from_urdf_str(LWR4_URDF, Some(LWR4_TOOL)).expect("bundled URDF");
     let q0 = [0.0, -0.5, 0.0, 1.5, 0.0, -1.14, 0.0];
-    let mut controller = HybridController::new(robot, LWR4_FLANGE, &q0, ControllerGains::default()).expect("controller");
+    let mut controller =
+        HybridController::new(robot, LWR4_FLANGE, &q0, ControllerGains::default()).expect("controller");
     let mut obs = Observation::zeros(7);
     obs.q.copy_from_slice(&[0.01, -0.49, 0.02, 1.51, -0.01, -1.13, 0.02]);
     obs.qd.copy_from_slice(&[0.01, 0.02, -0.01, 0.03, 0.0, 0.01, 0.02]);
@@ -22,7 +23,10 @@ fn controller_tick(c: &mut Criterion) {
         pose: tool,
         twist: Vector6::new(0.05, 0.02, 0.0, 0.0, 0.0, 0.0),
         wrench: Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0),
-        frame: Isometry3::from_parts(Translation3::from(tool.translation.vector), UnitQuaternion::from_euler_angles(3.1, 0.05, 0.0)),
+        frame: Isometry3::from_parts(
+            Translation3::from(tool.translation.vector),
+            UnitQuaternion::from_euler_angles(3.1, 0.05, 0.0),
+        ),
         position: [true, true, false, true, true, true],
         stiffness: [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0],
         kp: 0.5,

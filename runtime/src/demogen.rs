@@ -188,7 +188,9 @@ fn tool() -> Tool {
     let tip = robot.tool_in_base(&data);
     Tool {
         orientation: flange_pose.rotation,
-        tip_in_flange: flange_pose.inverse_transform_point(&tip.translation.vector.into()).coords,
+        tip_in_flange: flange_pose
+            .inverse_transform_point(&tip.translation.vector.into())
+            .coords,
     }
 }
 
@@ -215,14 +217,21 @@ impl Wobble {
             .map(|_| {
                 let direction = Vector3::new(rng.normal(), rng.normal(), rng.normal());
                 let direction = direction / direction.norm().max(1e-9);
-                (rng.range(low_hz, high_hz), rng.range(0.0, 2.0 * PI), direction * amplitude / (count as f64).sqrt())
+                (
+                    rng.range(low_hz, high_hz),
+                    rng.range(0.0, 2.0 * PI),
+                    direction * amplitude / (count as f64).sqrt(),
+                )
             })
             .collect();
         Wobble { terms }
     }
 
     fn at(&self, t: f64) -> Vector3<f64> {
-        self.terms.iter().map(|(hz, phase, v)| v * (2.0 * PI * hz * t + phase).sin()).sum()
+        self.terms
+            .iter()
+            .map(|(hz, phase, v)| v * (2.0 * PI * hz * t + phase).sin())
+            .sum()
     }
 }
 
@@ -278,8 +287,16 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let settle = 0.25;
             let slide_s = rng.range(4.0, 4.4);
             let contact_s = settle + slide_s + settle;
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
-            phases.push(Phase { label: "approach", duration_s: rng.range(1.5, 1.8), state: free(hover, c1, w1) });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(hover, hover, 0.0),
+            });
+            phases.push(Phase {
+                label: "approach",
+                duration_s: rng.range(1.5, 1.8),
+                state: free(hover, c1, w1),
+            });
             phases.push(Phase {
                 label: "slide",
                 duration_s: contact_s,
@@ -291,12 +308,27 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     let position = c1 + (c2 - c1) * progress + lateral;
                     let mut force = touch_down_lift_off(local, contact_s, f0);
                     force *= 1.0 + 0.04 * (2.0 * PI * 0.7 * t + slow_phase).sin();
-                    TipState { position, normal: up, normal_force: force }
+                    TipState {
+                        position,
+                        normal: up,
+                        normal_force: force,
+                    }
                 }),
             });
-            phases.push(Phase { label: "leave", duration_s: rng.range(1.4, 1.7), state: free(c2, leave, w3) });
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(leave, leave, 0.0) });
-            surface = TruthSurface::Plane { point_m: [0.55, 0.0, SURFACE_Z_M], normal: [0.0, 0.0, 1.0] };
+            phases.push(Phase {
+                label: "leave",
+                duration_s: rng.range(1.4, 1.7),
+                state: free(c2, leave, w3),
+            });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(leave, leave, 0.0),
+            });
+            surface = TruthSurface::Plane {
+                point_m: [0.55, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
         }
         StdSkill::Touch => {
             friction = 0.4;
@@ -307,8 +339,16 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let back = Vector3::new(0.5466, 0.02, 0.37);
             let (w1, w2) = (warp_of(&mut rng), warp_of(&mut rng));
             let (rise, fall) = (rng.range(0.08, 0.1), rng.range(0.1, 0.12));
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
-            phases.push(Phase { label: "approach", duration_s: rng.range(2.0, 2.3), state: free(hover, contact, w1) });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(hover, hover, 0.0),
+            });
+            phases.push(Phase {
+                label: "approach",
+                duration_s: rng.range(2.0, 2.3),
+                state: free(hover, contact, w1),
+            });
             phases.push(Phase {
                 label: "touch",
                 duration_s: rise + fall,
@@ -319,12 +359,27 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     } else {
                         peak * 0.5 * (1.0 + (PI * (local - rise) / fall).cos())
                     };
-                    TipState { position: contact, normal: up, normal_force: force }
+                    TipState {
+                        position: contact,
+                        normal: up,
+                        normal_force: force,
+                    }
                 }),
             });
-            phases.push(Phase { label: "return", duration_s: rng.range(1.9, 2.2), state: free(contact, back, w2) });
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(back, back, 0.0) });
-            surface = TruthSurface::Plane { point_m: [0.5466, 0.0, SURFACE_Z_M], normal: [0.0, 0.0, 1.0] };
+            phases.push(Phase {
+                label: "return",
+                duration_s: rng.range(1.9, 2.2),
+                state: free(contact, back, w2),
+            });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(back, back, 0.0),
+            });
+            surface = TruthSurface::Plane {
+                point_m: [0.5466, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
         }
         StdSkill::Press => {
             friction = 0.6;
@@ -339,8 +394,16 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let (rise, hold, release) = (rng.range(0.8, 1.0), rng.range(0.7, 0.9), rng.range(0.9, 1.1));
             let total = rise + hold + release;
             let wobble_phase = rng.range(0.0, 2.0 * PI);
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
-            phases.push(Phase { label: "approach", duration_s: rng.range(1.9, 2.2), state: free(hover, contact, w1) });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(hover, hover, 0.0),
+            });
+            phases.push(Phase {
+                label: "approach",
+                duration_s: rng.range(1.9, 2.2),
+                state: free(hover, contact, w1),
+            });
             phases.push(Phase {
                 label: "press",
                 duration_s: total,
@@ -355,12 +418,27 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     };
                     force = force.max(0.0);
                     let depth = ((force - preload) / stiffness).clamp(0.0, travel);
-                    TipState { position: contact - up * depth, normal: up, normal_force: force }
+                    TipState {
+                        position: contact - up * depth,
+                        normal: up,
+                        normal_force: force,
+                    }
                 }),
             });
-            phases.push(Phase { label: "retract", duration_s: rng.range(1.5, 1.8), state: free(contact, back, w2) });
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(back, back, 0.0) });
-            surface = TruthSurface::Plane { point_m: [0.5466, 0.0, SURFACE_Z_M], normal: [0.0, 0.0, 1.0] };
+            phases.push(Phase {
+                label: "retract",
+                duration_s: rng.range(1.5, 1.8),
+                state: free(contact, back, w2),
+            });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(back, back, 0.0),
+            });
+            surface = TruthSurface::Plane {
+                point_m: [0.5466, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
         }
         StdSkill::Contour => {
             friction = 0.3;
@@ -380,8 +458,16 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let (base, swing) = (7.0, 3.0);
             // Mean of base + swing·sin(π s) over the contour.
             force_n = base + swing * 2.0 / PI;
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(hover, hover, 0.0) });
-            phases.push(Phase { label: "approach", duration_s: rng.range(1.5, 1.8), state: free(hover, c1, w1) });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(hover, hover, 0.0),
+            });
+            phases.push(Phase {
+                label: "approach",
+                duration_s: rng.range(1.5, 1.8),
+                state: free(hover, c1, w1),
+            });
             phases.push(Phase {
                 label: "contour",
                 duration_s: contact_s,
@@ -395,12 +481,28 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     position.y = 0.01 * (PI * progress).sin();
                     let profile = base + swing * (PI * s).sin();
                     let force = touch_down_lift_off(local, contact_s, 1.0) * profile;
-                    TipState { position, normal, normal_force: force }
+                    TipState {
+                        position,
+                        normal,
+                        normal_force: force,
+                    }
                 }),
             });
-            phases.push(Phase { label: "leave", duration_s: rng.range(1.4, 1.7), state: free(c2, leave, w3) });
-            phases.push(Phase { label: "rest", duration_s: 0.4, state: free(leave, leave, 0.0) });
-            surface = TruthSurface::Cylinder { axis_point_m: centre.into(), axis: [0.0, 1.0, 0.0], radius_m: 0.15 };
+            phases.push(Phase {
+                label: "leave",
+                duration_s: rng.range(1.4, 1.7),
+                state: free(c2, leave, w3),
+            });
+            phases.push(Phase {
+                label: "rest",
+                duration_s: 0.4,
+                state: free(leave, leave, 0.0),
+            });
+            surface = TruthSurface::Cylinder {
+                axis_point_m: centre.into(),
+                axis: [0.0, 1.0, 0.0],
+                radius_m: 0.15,
+            };
         }
     }
 
@@ -430,13 +532,21 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let in_contact = state.normal_force > 0.0;
             // In contact, static friction holds the tip against the hand's tremor: the tremor
             // shows in the force instead, and only the intended path slides.
-            let shake = if in_contact { Vector3::zeros() } else { tremor.at(t) + wander.at(t) };
+            let shake = if in_contact {
+                Vector3::zeros()
+            } else {
+                tremor.at(t) + wander.at(t)
+            };
             let tip = state.position + shake;
             let velocity = previous_tip.map_or(Vector3::zeros(), |p| (tip - p) / dt);
             previous_tip = Some(tip);
             let tangential = velocity - state.normal * state.normal.dot(&velocity);
             let friction_force = -tangential * (friction * state.normal_force / tangential.norm().max(0.005));
-            let hand = if in_contact { tremor.at(t) * (state.normal_force * 400.0) } else { Vector3::zeros() };
+            let hand = if in_contact {
+                tremor.at(t) * (state.normal_force * 400.0)
+            } else {
+                Vector3::zeros()
+            };
             let force = state.normal * state.normal_force + friction_force + hand;
             if state.normal_force > peak.1 {
                 peak = (t, state.normal_force);
@@ -458,7 +568,11 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
         }
         t0 += n as f64 * dt;
         if phase.label != "rest" {
-            segments.push(TruthSegment { label: phase.label.to_string(), start_s, end_s: t0 });
+            segments.push(TruthSegment {
+                label: phase.label.to_string(),
+                start_s,
+                end_s: t0,
+            });
         }
     }
     // The rests belong to the neighbouring motion: the first to the approach, the last to the leaving.
@@ -499,7 +613,11 @@ fn touch_down_lift_off(local: f64, total: f64, level: f64) -> f64 {
     } else {
         1.0 + 0.35 * (-(local - rise) / 0.08).exp()
     };
-    let release = if local > total - lift { ((total - local) / lift).clamp(0.0, 1.0) } else { 1.0 };
+    let release = if local > total - lift {
+        ((total - local) / lift).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
     level * envelope * release
 }
 
@@ -556,14 +674,24 @@ mod tests {
                     TruthSurface::Plane { point_m, normal } => {
                         (tip - Vector3::from(*point_m)).dot(&Vector3::from(*normal)) - TIP_RADIUS_M
                     }
-                    TruthSurface::Cylinder { axis_point_m, radius_m, .. } => {
+                    TruthSurface::Cylinder {
+                        axis_point_m, radius_m, ..
+                    } => {
                         let d = tip - Vector3::from(*axis_point_m);
                         (d.x * d.x + d.z * d.z).sqrt() - radius_m - TIP_RADIUS_M
                     }
                 };
-                assert!(gap > -0.0085, "{skill:?}: the tip goes {gap} m into the surface at {}", sample.t_s);
+                assert!(
+                    gap > -0.0085,
+                    "{skill:?}: the tip goes {gap} m into the surface at {}",
+                    sample.t_s
+                );
                 if normal_force > 3.0 && skill != StdSkill::Press {
-                    assert!(gap.abs() < 1e-3, "{skill:?}: pressing {normal_force} N while {gap} m away at {}", sample.t_s);
+                    assert!(
+                        gap.abs() < 1e-3,
+                        "{skill:?}: pressing {normal_force} N while {gap} m away at {}",
+                        sample.t_s
+                    );
                 }
             }
         }

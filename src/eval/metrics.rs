@@ -55,7 +55,9 @@ impl ContactPlan {
             relative_to_peak: false,
         };
         for state in &skill.states {
-            let ir::StateKind::Active(active) = &state.kind else { continue };
+            let ir::StateKind::Active(active) = &state.kind else {
+                continue;
+            };
             let Some(force_id) = active.force else { continue };
             if active.position_controlled.iter().all(|p| *p) {
                 continue;
@@ -82,7 +84,11 @@ impl ContactPlan {
                 _ => None,
             };
             if let Some(segment) = segment {
-                let motion = learned.motions.iter().find(|(_, m)| m.segment == segment).map(|(name, _)| name.clone());
+                let motion = learned
+                    .motions
+                    .iter()
+                    .find(|(_, m)| m.segment == segment)
+                    .map(|(name, _)| name.clone());
                 plan.replay_states.push(match motion {
                     Some(name) => format!("replay:{name}"),
                     None => format!("replay:segment {}", segment + 1),
@@ -124,9 +130,18 @@ pub fn measure(
     replay: bool,
     replay_frame_z: &dyn Fn(f64) -> Vector3<f64>,
 ) -> Metrics {
-    let contact_states = if replay { &plan.replay_states } else { &plan.skill_states };
-    let contact_index: Vec<u32> =
-        log.states.iter().enumerate().filter(|(_, name)| contact_states.contains(name)).map(|(i, _)| i as u32).collect();
+    let contact_states = if replay {
+        &plan.replay_states
+    } else {
+        &plan.skill_states
+    };
+    let contact_index: Vec<u32> = log
+        .states
+        .iter()
+        .enumerate()
+        .filter(|(_, name)| contact_states.contains(name))
+        .map(|(i, _)| i as u32)
+        .collect();
     let prepose = log.states.iter().position(|s| s == "prepose").map(|i| i as u32);
 
     let mut metrics = Metrics::default();
@@ -187,7 +202,11 @@ pub fn measure(
     }
     if metrics.contact_ticks > 0 {
         let n = metrics.contact_ticks as f64;
-        let norm = if plan.relative_to_peak { desired_peak } else { desired_sum / n };
+        let norm = if plan.relative_to_peak {
+            desired_peak
+        } else {
+            desired_sum / n
+        };
         if norm.abs() > 1e-9 {
             metrics.force_rms_rel = Some((sq / n).sqrt() / norm.abs());
         }

@@ -13,7 +13,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog};
-use skill_runtime::skill::{Learned, LearnOptions};
+use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::learn_cmd::{error_chain, learn_from_files, load_skill, Failure};
 use crate::run_cmd::load_scene;
@@ -174,7 +174,11 @@ fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
             let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
             (text, path.display().to_string(), base)
         }
-        None => (DEFAULT_TRIALS.to_string(), DEFAULT_TRIALS_PATH.to_string(), PathBuf::from("examples/eval")),
+        None => (
+            DEFAULT_TRIALS.to_string(),
+            DEFAULT_TRIALS_PATH.to_string(),
+            PathBuf::from("examples/eval"),
+        ),
     };
     let trials: TrialsFile =
         toml::from_str(&text).map_err(|err| Failure::Input(format!("`{name}`: {}", err.to_string().trim())))?;
@@ -185,7 +189,10 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
     let file = base_dir.join(&spec.file);
     let demo = base_dir.join(&spec.demo);
     let fallback_name = spec.name.clone().unwrap_or_else(|| {
-        spec.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "?".to_string())
+        spec.file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "?".to_string())
     });
     let loaded = load_skill(&file, spec.name.as_deref()).and_then(|(_, skill)| {
         let learned = learn_from_files(&skill, &demo, &LearnOptions::default())?;
@@ -198,7 +205,12 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
         }
         Err(Failure::Input(message) | Failure::Usage(message)) => (fallback_name, Err(message)),
     };
-    Prepared { name, program_skill, spec, base_dir: base_dir.to_path_buf() }
+    Prepared {
+        name,
+        program_skill,
+        spec,
+        base_dir: base_dir.to_path_buf(),
+    }
 }
 
 fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
@@ -235,7 +247,11 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
         Ok(bound) => bound,
         Err(err) => return failed(err.to_string()),
     };
-    let mode = if job.replay { Mode::Replay(learned) } else { Mode::Skill(&bound) };
+    let mode = if job.replay {
+        Mode::Replay(learned)
+    } else {
+        Mode::Skill(&bound)
+    };
     let (report, log) = match simulate(&scene, mode, &ExecOptions::default()) {
         Ok(done) => done,
         Err(err) => return failed(error_chain(&err)),
@@ -243,9 +259,10 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
     let frame_z = |t: f64| replay_frame_z(skill, learned, plan, t);
     let metrics: Metrics = metrics::measure(&log, plan, job.replay, &frame_z);
     let learned_force = plan.force.as_ref().map(|force| match force {
-        skill_runtime::skill::LearnedForce::Dmp { .. } | skill_runtime::skill::LearnedForce::Magnitude { .. } => {
-            (0..100).map(|k| metrics::desired_at(force, k as f64 * 0.05)).fold(0.0, f64::max)
-        }
+        skill_runtime::skill::LearnedForce::Dmp { .. } | skill_runtime::skill::LearnedForce::Magnitude { .. } => (0
+            ..100)
+            .map(|k| metrics::desired_at(force, k as f64 * 0.05))
+            .fold(0.0, f64::max),
         other => other.value_n().unwrap_or(0.0),
     });
     let criteria = prepared.spec.criteria;
@@ -257,7 +274,9 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
         success &= metrics.contact_share.is_some_and(|v| v >= min);
     }
     if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
-        success &= metrics.stop_force_n.is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
+        success &= metrics
+            .stop_force_n
+            .is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
     }
     Outcome {
         result: TrialResult {
@@ -274,7 +293,11 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
             duration_s: report.duration_s,
             message: report.message.clone(),
             error: false,
-            states: report.visits.iter().map(|v| format!("{}@{:.2}", v.state, v.enter_s)).collect(),
+            states: report
+                .visits
+                .iter()
+                .map(|v| format!("{}@{:.2}", v.state, v.enter_s))
+                .collect(),
         },
         log,
     }
@@ -285,7 +308,9 @@ fn replay_frame_z(skill: &skill_ir::Skill, learned: &Learned, plan: &ContactPlan
     match plan.frame {
         Some(skill_ir::FrameRef::Learned(id)) => {
             let name = &skill.learn.frames[id.index()].name;
-            learned.frames.get(name).map_or(nalgebra::Vector3::z(), |frame| frame.at(t).rotation * nalgebra::Vector3::z())
+            learned.frames.get(name).map_or(nalgebra::Vector3::z(), |frame| {
+                frame.at(t).rotation * nalgebra::Vector3::z()
+            })
         }
         _ => nalgebra::Vector3::z(),
     }
@@ -300,14 +325,20 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
         .filter(|spec| {
             args.skills.is_empty() || {
                 let stem = spec.name.clone().unwrap_or_else(|| {
-                    spec.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+                    spec.file
+                        .file_stem()
+                        .map(|s| s.to_string_lossy().into_owned())
+                        .unwrap_or_default()
                 });
                 args.skills.contains(&stem)
             }
         })
         .collect();
     if selected.is_empty() {
-        return Err(Failure::Usage(format!("no skill selected; the trials have {}", "none matching --skill")));
+        return Err(Failure::Usage(format!(
+            "no skill selected; the trials have {}",
+            "none matching --skill"
+        )));
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
@@ -320,13 +351,22 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     progress.set_message("learning");
-    let prepared: Vec<Prepared> = pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
+    let prepared: Vec<Prepared> =
+        pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
     let mut jobs = Vec::new();
     for (skill, prep) in prepared.iter().enumerate() {
         for variant in 0..prep.spec.variants.len() {
-            jobs.push(Job { skill, variant, replay: false });
+            jobs.push(Job {
+                skill,
+                variant,
+                replay: false,
+            });
             if !args.no_replay {
-                jobs.push(Job { skill, variant, replay: true });
+                jobs.push(Job {
+                    skill,
+                    variant,
+                    replay: true,
+                });
             }
         }
     }
@@ -350,7 +390,8 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let real = match &args.real {
         Some(dir) => {
             let (_, slide) = load_skill(Path::new("stdlib-skills/slide.skill"), None)?;
-            let results = pool.install(|| real::evaluate(dir, &slide, Path::new("examples/scenes/table.toml")))
+            let results = pool
+                .install(|| real::evaluate(dir, &slide, Path::new("examples/scenes/table.toml")))
                 .map_err(Failure::Usage)?;
             print!("{}", report::real_table(&results));
             results

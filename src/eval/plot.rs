@@ -12,7 +12,12 @@ use skill_runtime::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
 
 use super::{Outcome, SkillView};
 
-const SEGMENT_COLOURS: [RGBColor; 4] = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(148, 103, 189)];
+const SEGMENT_COLOURS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
 
 fn trial_colour(index: usize) -> RGBColor {
     const COLOURS: [RGBColor; 6] = [
@@ -60,7 +65,10 @@ type DrawResult = Result<(), Box<dyn std::error::Error>>;
 /// Ticks after pre-positioning, every `stride`.
 fn ticks(log: &RunLog, stride: usize) -> impl Iterator<Item = &skill_runtime::exec::Tick> {
     let prepose = log.states.iter().position(|s| s == "prepose").map(|i| i as u32);
-    log.ticks.iter().filter(move |t| Some(t.state) != prepose).step_by(stride.max(1))
+    log.ticks
+        .iter()
+        .filter(move |t| Some(t.state) != prepose)
+        .step_by(stride.max(1))
 }
 
 fn start_time(log: &RunLog) -> f64 {
@@ -88,11 +96,23 @@ fn bounds(points: impl Iterator<Item = (f64, f64)>) -> ((f64, f64), (f64, f64)) 
 
 fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
     let offset = flange_to_tool();
-    let demo = read_csv(&skill.demo, &ReadOptions::default()).map_err(|e| e.to_string())?.demo;
+    let demo = read_csv(&skill.demo, &ReadOptions::default())
+        .map_err(|e| e.to_string())?
+        .demo;
     let tool_of = |p: &Vector3<f64>, q: &nalgebra::UnitQuaternion<f64>| p + q * offset.translation.vector;
-    let demo_tool: Vec<Vector3<f64>> = demo.position_m.iter().zip(&demo.orientation).map(|(p, q)| tool_of(p, q)).collect();
+    let demo_tool: Vec<Vector3<f64>> = demo
+        .position_m
+        .iter()
+        .zip(&demo.orientation)
+        .map(|(p, q)| tool_of(p, q))
+        .collect();
     let segment_of = |k: usize| {
-        skill.learned.map_or(0, |l| l.segments.iter().position(|s| k >= s.start_index && k < s.end_index).unwrap_or(0))
+        skill.learned.map_or(0, |l| {
+            l.segments
+                .iter()
+                .position(|s| k >= s.start_index && k < s.end_index)
+                .unwrap_or(0)
+        })
     };
     let preview: Vec<Vector3<f64>> = skill
         .learned
@@ -104,7 +124,9 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
     let run_paths: Vec<(String, bool, Vec<Vector3<f64>>)> = runs
         .iter()
         .map(|o| {
-            let points = ticks(&o.log, 20).map(|t| Vector3::new(t.measured[0], t.measured[1], t.measured[2])).collect();
+            let points = ticks(&o.log, 20)
+                .map(|t| Vector3::new(t.measured[0], t.measured[1], t.measured[2]))
+                .collect();
             (o.result.variant.clone(), o.result.mode == "replay", points)
         })
         .collect();
@@ -116,12 +138,18 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
                 match frame {
                     skill_runtime::skill::LearnedFrame::Constant(pose) => {
                         let iso = pose.isometry();
-                        arrows.push((iso.translation.vector + demo.orientation[0] * offset.translation.vector, iso.rotation * Vector3::z()));
+                        arrows.push((
+                            iso.translation.vector + demo.orientation[0] * offset.translation.vector,
+                            iso.rotation * Vector3::z(),
+                        ));
                     }
                     skill_runtime::skill::LearnedFrame::Samples(poses) => {
                         for pose in poses.iter().step_by(25) {
                             let iso = pose.isometry();
-                            arrows.push((iso.translation.vector + demo.orientation[0] * offset.translation.vector, iso.rotation * Vector3::z()));
+                            arrows.push((
+                                iso.translation.vector + demo.orientation[0] * offset.translation.vector,
+                                iso.rotation * Vector3::z(),
+                            ));
                         }
                     }
                 }
@@ -170,7 +198,10 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(4)));
         }
         chart
-            .draw_series(LineSeries::new(preview.iter().map(|p| (p[pick.0], p[pick.1])), BLACK.stroke_width(1)))?
+            .draw_series(LineSeries::new(
+                preview.iter().map(|p| (p[pick.0], p[pick.1])),
+                BLACK.stroke_width(1),
+            ))?
             .label("learned rollout")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
         let mut variant_index = Vec::<String>::new();
@@ -199,16 +230,28 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
                 vec![(origin[pick.0], origin[pick.1]), (tip[pick.0], tip[pick.1])],
                 RGBColor(0, 0, 0).stroke_width(2),
             )))?;
-            chart.draw_series(std::iter::once(Circle::new((tip[pick.0], tip[pick.1]), 3, BLACK.filled())))?;
+            chart.draw_series(std::iter::once(Circle::new(
+                (tip[pick.0], tip[pick.1]),
+                3,
+                BLACK.filled(),
+            )))?;
         }
-        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 11)).draw()?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 11))
+            .draw()?;
     }
     root.present()?;
     Ok(())
 }
 
 fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
-    let replay_z = skill.learned.and_then(|l| l.frames.values().next()).map_or(Vector3::z(), |f| f.at(0.0).rotation * Vector3::z());
+    let replay_z = skill
+        .learned
+        .and_then(|l| l.frames.values().next())
+        .map_or(Vector3::z(), |f| f.at(0.0).rotation * Vector3::z());
     // Per trial: variant, replay or not, measured and desired force over time.
     type Series = (String, bool, Vec<(f64, f64)>, Vec<(f64, f64)>);
     let series: Vec<Series> = runs
@@ -235,7 +278,10 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
         .collect();
     let ((x0, x1), (mut y0, mut y1)) = bounds(series.iter().flat_map(|(_, _, m, d)| m.iter().chain(d.iter()).copied()));
     // Impact spikes would flatten the rest: clip the view at a few times the desired force.
-    let desired_peak = series.iter().flat_map(|(_, _, _, d)| d.iter().map(|p| p.1)).fold(0.0, f64::max);
+    let desired_peak = series
+        .iter()
+        .flat_map(|(_, _, _, d)| d.iter().map(|p| p.1))
+        .fold(0.0, f64::max);
     if desired_peak > 0.0 {
         y1 = y1.min(desired_peak * 3.0);
         y0 = y0.max(-desired_peak);
@@ -243,12 +289,19 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
     let root = SVGBackend::new(path, (1300, 480)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{} — applied force along the compliant z", skill.name), ("sans-serif", 18))
+        .caption(
+            format!("{} — applied force along the compliant z", skill.name),
+            ("sans-serif", 18),
+        )
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(55)
         .build_cartesian_2d(x0..x1, y0..y1)?;
-    chart.configure_mesh().x_desc("time since the skill started [s]").y_desc("force [N]").draw()?;
+    chart
+        .configure_mesh()
+        .x_desc("time since the skill started [s]")
+        .y_desc("force [N]")
+        .draw()?;
     let mut variants = Vec::<String>::new();
     for (variant, replay, measured, desired) in &series {
         let index = match variants.iter().position(|v| v == variant) {
@@ -270,10 +323,20 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
                 .draw_series(LineSeries::new(clipped, colour.stroke_width(2)))?
                 .label(variant.clone())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
-            chart.draw_series(desired.iter().step_by(5).map(|&(t, f)| Circle::new((t, f.clamp(y0, y1)), 1, BLACK.filled())))?;
+            chart.draw_series(
+                desired
+                    .iter()
+                    .step_by(5)
+                    .map(|&(t, f)| Circle::new((t, f.clamp(y0, y1)), 1, BLACK.filled())),
+            )?;
         }
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 11)).draw()?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()?;
     root.present()?;
     Ok(())
 }
@@ -281,7 +344,9 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
 /// The demonstration's applied force along each learned frame's z, with the learned desired
 /// forces over their segments (thesis Fig. 4.7, 5.9c).
 fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
-    let demo = read_csv(&skill.demo, &ReadOptions::default()).map_err(|e| e.to_string())?.demo;
+    let demo = read_csv(&skill.demo, &ReadOptions::default())
+        .map_err(|e| e.to_string())?
+        .demo;
     let (Some(learned), Some(ir)) = (skill.learned, skill.skill) else {
         return Err("nothing learned to plot".into());
     };
@@ -290,7 +355,9 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
     root.fill(&WHITE)?;
     let mut lines: Vec<(String, RGBColor, Vec<(f64, f64)>, bool)> = Vec::new();
     for (index, decl) in ir.learn.frames.iter().enumerate() {
-        let Some(frame) = learned.frames.get(&decl.name) else { continue };
+        let Some(frame) = learned.frames.get(&decl.name) else {
+            continue;
+        };
         let segment_start = match &decl.source {
             skill_ir::FrameSource::ForceAlignedSamples { segment } => {
                 learned.segments.get(segment.index()).map_or(0.0, |s| s.start_s)
@@ -304,17 +371,26 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
             .step_by(5)
             .map(|(t, f)| (t - t0, -f.dot(&(frame.at(t - segment_start).rotation * Vector3::z()))))
             .collect();
-        lines.push((format!("demonstration along {}.z", decl.name), trial_colour(index), points, false));
+        lines.push((
+            format!("demonstration along {}.z", decl.name),
+            trial_colour(index),
+            points,
+            false,
+        ));
     }
     for decl in &ir.learn.forces {
-        let Some(force) = learned.forces.get(&decl.name) else { continue };
+        let Some(force) = learned.forces.get(&decl.name) else {
+            continue;
+        };
         let segment = match &decl.source {
             skill_ir::ForceSource::Constant { segment, .. }
             | skill_ir::ForceSource::Dmp { segment, .. }
             | skill_ir::ForceSource::Magnitude { segment, .. } => Some(segment.index()),
             _ => None,
         };
-        let Some(segment) = segment.and_then(|s| learned.segments.get(s)) else { continue };
+        let Some(segment) = segment.and_then(|s| learned.segments.get(s)) else {
+            continue;
+        };
         let duration = segment.end_s - segment.start_s;
         let points = (0..=200)
             .map(|k| {
@@ -326,15 +402,28 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
     }
     let ((x0, x1), (y0, y1)) = bounds(lines.iter().flat_map(|(_, _, p, _)| p.iter().copied()));
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{} — applied force along the compliant z, and the learned force", skill.name), ("sans-serif", 18))
+        .caption(
+            format!(
+                "{} — applied force along the compliant z, and the learned force",
+                skill.name
+            ),
+            ("sans-serif", 18),
+        )
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(55)
         .build_cartesian_2d(x0..x1, y0..y1)?;
-    chart.configure_mesh().x_desc("demonstration time [s]").y_desc("force [N]").draw()?;
+    chart
+        .configure_mesh()
+        .x_desc("demonstration time [s]")
+        .y_desc("force [N]")
+        .draw()?;
     for segment in &learned.segments {
         let colour = SEGMENT_COLOURS[learned.segments.iter().position(|s| s == segment).unwrap_or(0) % 4].mix(0.08);
-        chart.draw_series(std::iter::once(Rectangle::new([(segment.start_s - t0, y0), (segment.end_s - t0, y1)], colour.filled())))?;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(segment.start_s - t0, y0), (segment.end_s - t0, y1)],
+            colour.filled(),
+        )))?;
     }
     for (label, colour, points, thick) in lines {
         chart
@@ -342,21 +431,38 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 11)).draw()?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()?;
     root.present()?;
     Ok(())
 }
 
 fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
-    let demo = read_csv(&skill.demo, &ReadOptions::default()).map_err(|e| e.to_string())?.demo;
+    let demo = read_csv(&skill.demo, &ReadOptions::default())
+        .map_err(|e| e.to_string())?
+        .demo;
     let t_demo0 = demo.t_s.first().copied().unwrap_or(0.0);
-    let demo_series: Vec<Vec<(f64, f64)>> =
-        (0..3).map(|axis| demo.t_s.iter().zip(&demo.force_n).step_by(10).map(|(t, f)| (t - t_demo0, -f[axis])).collect()).collect();
+    let demo_series: Vec<Vec<(f64, f64)>> = (0..3)
+        .map(|axis| {
+            demo.t_s
+                .iter()
+                .zip(&demo.force_n)
+                .step_by(10)
+                .map(|(t, f)| (t - t_demo0, -f[axis]))
+                .collect()
+        })
+        .collect();
     let trial = runs.iter().find(|o| o.result.mode == "skill" && !o.result.error);
     let trial_series: Vec<Vec<(f64, f64)>> = match trial {
         Some(o) => {
             let t0 = start_time(&o.log);
-            (0..3).map(|axis| ticks(&o.log, 10).map(|t| (t.t_s - t0, t.wrench_base[axis])).collect()).collect()
+            (0..3)
+                .map(|axis| ticks(&o.log, 10).map(|t| (t.t_s - t0, t.wrench_base[axis])).collect())
+                .collect()
         }
         None => vec![Vec::new(); 3],
     };
@@ -365,8 +471,14 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
     let panels = root.split_evenly((2, 1));
     let trial_name = trial.map_or("no trial".to_string(), |o| o.result.variant.clone());
     for (panel, (title, data)) in panels.iter().zip([
-        (format!("{} — demonstration, applied force (world frame)", skill.name), &demo_series),
-        (format!("{} — skill, {trial_name}, applied force (world frame)", skill.name), &trial_series),
+        (
+            format!("{} — demonstration, applied force (world frame)", skill.name),
+            &demo_series,
+        ),
+        (
+            format!("{} — skill, {trial_name}, applied force (world frame)", skill.name),
+            &trial_series,
+        ),
     ]) {
         let ((x0, x1), (y0, y1)) = bounds(data.iter().flat_map(|s| s.iter().copied()));
         let mut chart = ChartBuilder::on(panel)
@@ -379,11 +491,19 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
         for (axis, series) in data.iter().enumerate() {
             let colour = SEGMENT_COLOURS[axis];
             chart
-                .draw_series(LineSeries::new(series.iter().map(|&(t, f)| (t, f.clamp(-60.0, 60.0))), colour.stroke_width(1)))?
+                .draw_series(LineSeries::new(
+                    series.iter().map(|&(t, f)| (t, f.clamp(-60.0, 60.0))),
+                    colour.stroke_width(1),
+                ))?
                 .label(["fx", "fy", "fz"][axis])
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
         }
-        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 11)).draw()?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 11))
+            .draw()?;
     }
     root.present()?;
     Ok(())
@@ -393,7 +513,10 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
     let rows = runs.len().max(1);
     let root = SVGBackend::new(path, (1300, 60 + 34 * rows as u32)).into_drawing_area();
     root.fill(&WHITE)?;
-    let duration = runs.iter().map(|o| o.log.ticks.last().map_or(0.0, |t| t.t_s)).fold(1.0, f64::max);
+    let duration = runs
+        .iter()
+        .map(|o| o.log.ticks.last().map_or(0.0, |t| t.t_s))
+        .fold(1.0, f64::max);
     let mut chart = ChartBuilder::on(&root)
         .margin(10)
         .x_label_area_size(30)
@@ -405,7 +528,8 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
         .y_labels(rows)
         .y_label_formatter(&|y| {
             let index = (*y - 0.5).round() as usize;
-            runs.get(index).map_or(String::new(), |o| format!("{} ({})", o.result.variant, o.result.mode))
+            runs.get(index)
+                .map_or(String::new(), |o| format!("{} ({})", o.result.variant, o.result.mode))
         })
         .x_desc("time [s]")
         .draw()?;
@@ -429,9 +553,16 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
             };
             let colour = Palette99::pick(index);
             let (t0, t1) = (log.ticks[start].t_s, log.ticks[end - 1].t_s);
-            chart.draw_series(std::iter::once(Rectangle::new([(t0, row as f64 + 0.15), (t1, row as f64 + 0.85)], colour.filled())))?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(t0, row as f64 + 0.15), (t1, row as f64 + 0.85)],
+                colour.filled(),
+            )))?;
             if t1 - t0 > duration * 0.06 {
-                chart.draw_series(std::iter::once(Text::new(name, (t0 + 0.05, row as f64 + 0.62), ("sans-serif", 11))))?;
+                chart.draw_series(std::iter::once(Text::new(
+                    name,
+                    (t0 + 0.05, row as f64 + 0.62),
+                    ("sans-serif", 11),
+                )))?;
             }
             start = end;
         }

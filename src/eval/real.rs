@@ -55,7 +55,9 @@ fn label_boundaries(dir: &Path, file: &str) -> Option<Vec<usize>> {
         .filter(|l| !l.starts_with('#') && !l.starts_with("file,"))
         .filter_map(|line| {
             let fields: Vec<&str> = line.split(',').collect();
-            (fields.len() == 4 && fields[0].trim() == file).then(|| fields[1].trim().parse::<usize>().ok()).flatten()
+            (fields.len() == 4 && fields[0].trim() == file)
+                .then(|| fields[1].trim().parse::<usize>().ok())
+                .flatten()
         })
         .collect();
     starts.sort_unstable();
@@ -69,15 +71,26 @@ pub fn evaluate(dir: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> Resu
         .filter_map(Result::ok)
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .filter(|p| !matches!(p.file_name().and_then(|n| n.to_str()), Some("segment_labels.csv" | "index.csv")))
+        .filter(|p| {
+            !matches!(
+                p.file_name().and_then(|n| n.to_str()),
+                Some("segment_labels.csv" | "index.csv")
+            )
+        })
         .collect();
     files.sort();
     use rayon::prelude::*;
-    Ok(files.par_iter().map(|path| one(dir, path, skill, table_scene)).collect())
+    Ok(files
+        .par_iter()
+        .map(|path| one(dir, path, skill, table_scene))
+        .collect())
 }
 
 fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> RealResult {
-    let file = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let file = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let mut result = RealResult {
         file: file.clone(),
         samples: 0,
@@ -119,7 +132,13 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         result.boundary_errors_s = result
             .label_boundaries_s
             .iter()
-            .map(|l| result.found_boundaries_s.iter().map(|f| (f - l).abs()).fold(f64::INFINITY, f64::min))
+            .map(|l| {
+                result
+                    .found_boundaries_s
+                    .iter()
+                    .map(|f| (f - l).abs())
+                    .fold(f64::INFINITY, f64::min)
+            })
             .collect();
     }
     result.force_n = learned.forces.values().find_map(|f| match f {
@@ -140,7 +159,8 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     let thickness = 0.05;
     let centre = plane.translation.vector + z * (tool_offset + thickness / 2.0);
     let top_down = UnitQuaternion::from_rotation_matrix(&Rotation3::face_towards(&z, &Vector3::x()));
-    let (roll, pitch, yaw) = (top_down * UnitQuaternion::from_euler_angles(0.0, std::f64::consts::PI, 0.0)).euler_angles();
+    let (roll, pitch, yaw) =
+        (top_down * UnitQuaternion::from_euler_angles(0.0, std::f64::consts::PI, 0.0)).euler_angles();
     let sets = vec![
         format!("table.xyz=[{}, {}, {}]", centre.x, centre.y, centre.z),
         format!("table.rpy=[{roll}, {pitch}, {yaw}]"),

@@ -63,7 +63,10 @@ fn truncate(text: &str, width: usize) -> String {
 }
 
 fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// Writes `summary.json`, the plots and `index.html` into `out`; returns the HTML's path.
@@ -162,7 +165,11 @@ pub(super) fn write(
         html.push_str("<h2>Real demonstrations</h2>\n<p>The slide template learned from each real demonstration; boundary errors are the distance from each of the authors' label boundaries to the nearest boundary found.</p>\n");
         let _ = writeln!(html, "<pre>{}</pre>", escape(&real_table(real)));
     }
-    let _ = writeln!(html, "<h2>Terminal table</h2>\n<pre>{}</pre>\n</body></html>", escape(table));
+    let _ = writeln!(
+        html,
+        "<h2>Terminal table</h2>\n<pre>{}</pre>\n</body></html>",
+        escape(table)
+    );
     let index = out.join("index.html");
     atomic::write(&index, html.as_bytes())?;
     Ok(index)

@@ -65,16 +65,29 @@ pub struct BoundSkill<'a> {
 /// Binds `learned` to `skill`.
 pub fn bind<'a>(skill: &'a ir::Skill, learned: &'a Learned) -> Result<BoundSkill<'a>, BindError> {
     if learned.learned_version != crate::skill::LEARNED_VERSION {
-        return Err(BindError::Version { found: learned.learned_version, supported: crate::skill::LEARNED_VERSION });
+        return Err(BindError::Version {
+            found: learned.learned_version,
+            supported: crate::skill::LEARNED_VERSION,
+        });
     }
     if learned.skill != skill.name {
-        return Err(BindError::WrongSkill { expected: skill.name.clone(), found: learned.skill.clone() });
+        return Err(BindError::WrongSkill {
+            expected: skill.name.clone(),
+            found: learned.skill.clone(),
+        });
     }
     let expected = ir_hash(skill);
     if learned.ir_hash != expected {
-        return Err(BindError::Stale { skill: skill.name.clone(), expected, found: learned.ir_hash.clone() });
+        return Err(BindError::Stale {
+            skill: skill.name.clone(),
+            expected,
+            found: learned.ir_hash.clone(),
+        });
     }
-    let missing = |kind: &'static str, name: &str| BindError::Missing { kind, name: name.to_string() };
+    let missing = |kind: &'static str, name: &str| BindError::Missing {
+        kind,
+        name: name.to_string(),
+    };
     let plan = &skill.learn;
     Ok(BoundSkill {
         skill,
@@ -97,7 +110,13 @@ pub fn bind<'a>(skill: &'a ir::Skill, learned: &'a Learned) -> Result<BoundSkill
         thresholds: plan
             .thresholds
             .iter()
-            .map(|t| learned.thresholds.get(&t.name).map(|v| v.value).ok_or_else(|| missing("threshold", &t.name)))
+            .map(|t| {
+                learned
+                    .thresholds
+                    .get(&t.name)
+                    .map(|v| v.value)
+                    .ok_or_else(|| missing("threshold", &t.name))
+            })
             .collect::<Result<_, _>>()?,
     })
 }

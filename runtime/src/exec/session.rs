@@ -49,7 +49,11 @@ fn with_rig<T>(scene: &Scene, run: impl FnOnce(&mut Rig<'_>) -> Result<T, Sessio
     run(&mut rig)
 }
 
-fn simulate_on(rig: &mut Rig<'_>, mode: Mode<'_, '_>, options: &ExecOptions) -> Result<(RunReport, RunLog), SessionError> {
+fn simulate_on(
+    rig: &mut Rig<'_>,
+    mode: Mode<'_, '_>,
+    options: &ExecOptions,
+) -> Result<(RunReport, RunLog), SessionError> {
     let mut log = RunLog::default();
     let log_ref = if options.log { Some(&mut log) } else { None };
     let report = match mode {
@@ -102,11 +106,23 @@ fn task_on(
     let mut log = RunLog::default();
     let mut reports = Vec::new();
     let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>, log: &mut RunLog| {
-        let step_options = ExecOptions { overrides: task_step.step.overrides, prepose: first && options.prepose, ..options.clone() };
+        let step_options = ExecOptions {
+            overrides: task_step.step.overrides,
+            prepose: first && options.prepose,
+            ..options.clone()
+        };
         let mut step_log = RunLog::default();
-        let report = run_skill(&task_step.bound, rig, &step_options, options.log.then_some(&mut step_log))?;
+        let report = run_skill(
+            &task_step.bound,
+            rig,
+            &step_options,
+            options.log.then_some(&mut step_log),
+        )?;
         for mut tick in step_log.ticks {
-            tick.state = log.state_index(&format!("{}/{}", task_step.step.name, step_log.states[tick.state as usize]));
+            tick.state = log.state_index(&format!(
+                "{}/{}",
+                task_step.step.name, step_log.states[tick.state as usize]
+            ));
             log.ticks.push(tick);
         }
         Ok::<_, ExecError>(StepReport {

@@ -12,8 +12,8 @@ use super::learned::*;
 use crate::demo::{preprocess, Demo, DemoError, FilterOrder, PreprocessConfig};
 use crate::dmp::{fit_scalar, Dmp, DmpConfig, DmpError, QuatDmp};
 use crate::learn::constraint::{
-    fit_constraints, force_aligned_frame_at, force_aligned_frames, ConstraintConfig, ConstraintError,
-    ConstraintKind, ForceFrameConfig,
+    fit_constraints, force_aligned_frame_at, force_aligned_frames, ConstraintConfig, ConstraintError, ConstraintKind,
+    ForceFrameConfig,
 };
 use crate::learn::force::{constant_normal_force, ConstantForceConfig, ForceError};
 use crate::learn::segment::{
@@ -129,8 +129,17 @@ pub fn learn_skill(
     let demo = preprocess(demo, &config)?;
     let segments = segment(plan, &demo)?;
     let n = demo.len();
-    let rate_hz = if demo.duration_s() > 0.0 { (n - 1) as f64 / demo.duration_s() } else { 0.0 };
-    let mut learner = Learner { demo: &demo, segments: &segments, frames: Vec::new(), quality: Quality::default() };
+    let rate_hz = if demo.duration_s() > 0.0 {
+        (n - 1) as f64 / demo.duration_s()
+    } else {
+        0.0
+    };
+    let mut learner = Learner {
+        demo: &demo,
+        segments: &segments,
+        frames: Vec::new(),
+        quality: Quality::default(),
+    };
 
     let mut frames = BTreeMap::new();
     for decl in &plan.frames {
@@ -196,10 +205,23 @@ pub fn learn_skill(
 /// Cuts the demonstration as the plan says and checks the count.
 fn segment(plan: &ir::LearnPlan, demo: &Demo) -> Result<Vec<Segment>, LearnError> {
     let expected = plan.segments as usize;
-    let wrap = |source: SegmentError| LearnError::Segment { source_name: demo.source.clone(), source };
-    let rate_hz = if demo.duration_s() > 0.0 { (demo.len() - 1) as f64 / demo.duration_s() } else { 1.0 };
+    let wrap = |source: SegmentError| LearnError::Segment {
+        source_name: demo.source.clone(),
+        source,
+    };
+    let rate_hz = if demo.duration_s() > 0.0 {
+        (demo.len() - 1) as f64 / demo.duration_s()
+    } else {
+        1.0
+    };
     let (method, segments): (&'static str, Vec<Segment>) = match &plan.segmentation {
-        ir::Segmentation::None => ("none", vec![Segment { start: 0, end: demo.len() }]),
+        ir::Segmentation::None => (
+            "none",
+            vec![Segment {
+                start: 0,
+                end: demo.len(),
+            }],
+        ),
         ir::Segmentation::MaxForce => {
             let peak = demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max);
             if peak < CONTACT_N {
@@ -209,9 +231,20 @@ fn segment(plan: &ir::LearnPlan, demo: &Demo) -> Result<Vec<Segment>, LearnError
                     peak_n: peak,
                 });
             }
-            ("max_force", split_at_force_peak(&demo.force_n, &TouchConfig::default()).map_err(wrap)?.to_vec())
+            (
+                "max_force",
+                split_at_force_peak(&demo.force_n, &TouchConfig::default())
+                    .map_err(wrap)?
+                    .to_vec(),
+            )
         }
-        ir::Segmentation::Cluster { linkage, temporal, cut, min_length_s, features } => {
+        ir::Segmentation::Cluster {
+            linkage,
+            temporal,
+            cut,
+            min_length_s,
+            features,
+        } => {
             let config = ClusterConfig {
                 linkage: match linkage {
                     ir::Linkage::Ward => Linkage::Ward,
@@ -221,10 +254,15 @@ fn segment(plan: &ir::LearnPlan, demo: &Demo) -> Result<Vec<Segment>, LearnError
                 },
                 temporal: match temporal {
                     ir::Temporal::Connectivity { k } => Temporal::Connectivity { k: *k as usize },
-                    ir::Temporal::TimeFeature { weight } => Temporal::TimeFeature { weight: *weight, max_blocks: 2000 },
+                    ir::Temporal::TimeFeature { weight } => Temporal::TimeFeature {
+                        weight: *weight,
+                        max_blocks: 2000,
+                    },
                 },
                 cut: match cut {
-                    ir::Cut::Count(segments) => Cut::Count { segments: *segments as usize },
+                    ir::Cut::Count(segments) => Cut::Count {
+                        segments: *segments as usize,
+                    },
                     ir::Cut::Distance(threshold) => Cut::Distance { threshold: *threshold },
                 },
                 min_segment_samples: (min_length_s * rate_hz).round().max(1.0) as usize,
@@ -232,7 +270,12 @@ fn segment(plan: &ir::LearnPlan, demo: &Demo) -> Result<Vec<Segment>, LearnError
             };
             ("cluster", cluster_demo(demo, &config).map_err(wrap)?)
         }
-        ir::Segmentation::Changepoint { min_length_s, models, max_particles, features } => {
+        ir::Segmentation::Changepoint {
+            min_length_s,
+            models,
+            max_particles,
+            features,
+        } => {
             let config = ChangepointConfig {
                 models: models
                     .iter()
@@ -288,13 +331,20 @@ impl Learner<'_> {
         match point {
             ir::Point::Start(segment) => self.seg(segment).start,
             ir::Point::End(segment) => self.seg(segment).end - 1,
-            ir::Point::PeakForce => self
-                .demo
-                .force_n
-                .iter()
-                .enumerate()
-                .fold((0, f64::NEG_INFINITY), |best, (k, f)| if f.norm() > best.1 { (k, f.norm()) } else { best })
-                .0,
+            ir::Point::PeakForce => {
+                self.demo
+                    .force_n
+                    .iter()
+                    .enumerate()
+                    .fold((0, f64::NEG_INFINITY), |best, (k, f)| {
+                        if f.norm() > best.1 {
+                            (k, f.norm())
+                        } else {
+                            best
+                        }
+                    })
+                    .0
+            }
         }
     }
 
@@ -339,7 +389,10 @@ impl Learner<'_> {
 
     fn frame(&mut self, decl: &ir::FrameDecl) -> Result<LearnedFrame, LearnError> {
         let demo = self.demo;
-        let wrap = |source| LearnError::Frame { name: decl.name.clone(), source };
+        let wrap = |source| LearnError::Frame {
+            name: decl.name.clone(),
+            source,
+        };
         Ok(match &decl.source {
             ir::FrameSource::Constraint { segment, candidates } => {
                 let range = self.seg(*segment).range();
@@ -376,7 +429,11 @@ impl Learner<'_> {
             ir::FrameSource::ForceAlignedSamples { segment } => {
                 let seg = self.seg(*segment);
                 let range = seg.range();
-                let normal_force = without_friction(&demo.t_s[range.clone()], &demo.position_m[range.clone()], &demo.force_n[range.clone()]);
+                let normal_force = without_friction(
+                    &demo.t_s[range.clone()],
+                    &demo.position_m[range.clone()],
+                    &demo.force_n[range.clone()],
+                );
                 let frames = force_aligned_frames(&normal_force, &demo.position_m[range], &ForceFrameConfig::default())
                     .map_err(wrap)?;
                 let t0 = demo.t_s[seg.start];
@@ -394,12 +451,16 @@ impl Learner<'_> {
             }
             ir::FrameSource::ForceAlignedAt { point } => {
                 let index = self.point(*point);
-                let frame = force_aligned_frame_at(&demo.force_n, &demo.position_m, index, &ForceFrameConfig::default())
-                    .map_err(wrap)?;
+                let frame =
+                    force_aligned_frame_at(&demo.force_n, &demo.position_m, index, &ForceFrameConfig::default())
+                        .map_err(wrap)?;
                 let pose = nalgebra::Isometry3::from_parts(frame.origin_m.into(), frame.orientation);
                 LearnedFrame::Constant(FramePose::from_isometry("force_aligned", &pose, None))
             }
-            ir::FrameSource::Fixed { origin_m, quaternion_wxyz } => LearnedFrame::Constant(FramePose {
+            ir::FrameSource::Fixed {
+                origin_m,
+                quaternion_wxyz,
+            } => LearnedFrame::Constant(FramePose {
                 kind: "fixed".into(),
                 origin: *origin_m,
                 quaternion_wxyz: *quaternion_wxyz,
@@ -410,7 +471,11 @@ impl Learner<'_> {
 
     fn segment_times(&self, seg: Segment, name: &str, segment: usize) -> Result<Vec<f64>, LearnError> {
         if seg.len() < 5 {
-            return Err(LearnError::TooShort { segment: segment + 1, samples: seg.len(), name: name.to_string() });
+            return Err(LearnError::TooShort {
+                segment: segment + 1,
+                samples: seg.len(),
+                name: name.to_string(),
+            });
         }
         Ok(self.demo.t_s[seg.range()].to_vec())
     }
@@ -418,8 +483,14 @@ impl Learner<'_> {
     fn motion(&mut self, decl: &ir::MotionDecl) -> Result<LearnedMotion, LearnError> {
         let seg = self.seg(decl.segment);
         let t = self.segment_times(seg, &decl.name, decl.segment.index())?;
-        let config = DmpConfig { n_basis: decl.basis as usize, ..DmpConfig::default() };
-        let wrap = |source| LearnError::Dmp { name: decl.name.clone(), source };
+        let config = DmpConfig {
+            n_basis: decl.basis as usize,
+            ..DmpConfig::default()
+        };
+        let wrap = |source| LearnError::Dmp {
+            name: decl.name.clone(),
+            source,
+        };
         let positions = &self.demo.position_m[seg.range()];
         let orientations = &self.demo.orientation[seg.range()];
         let position = Dmp::fit_points(&config, &t, positions).map_err(wrap)?;
@@ -449,11 +520,18 @@ impl Learner<'_> {
                 orientation_rms_rad: (sum_rot / count).sqrt(),
             },
         );
-        Ok(LearnedMotion { segment: decl.segment.index(), position, orientation })
+        Ok(LearnedMotion {
+            segment: decl.segment.index(),
+            position,
+            orientation,
+        })
     }
 
     fn force(&mut self, decl: &ir::ForceDecl) -> Result<LearnedForce, LearnError> {
-        let wrap = |source| LearnError::Force { name: decl.name.clone(), source };
+        let wrap = |source| LearnError::Force {
+            name: decl.name.clone(),
+            source,
+        };
         Ok(match &decl.source {
             ir::ForceSource::Literal { value_n } => LearnedForce::Literal { value_n: *value_n },
             ir::ForceSource::Tracked => LearnedForce::Tracked { value_n: 0.0 },
@@ -467,7 +545,10 @@ impl Learner<'_> {
                 let seg = self.seg(*segment);
                 let t = self.segment_times(seg, &decl.name, segment.index())?;
                 let profile: Vec<f64> = seg.range().map(|k| self.applied_along(k, *along)).collect();
-                let config = ConstantForceConfig { contact_threshold_n: CONTACT_N, ..ConstantForceConfig::default() };
+                let config = ConstantForceConfig {
+                    contact_threshold_n: CONTACT_N,
+                    ..ConstantForceConfig::default()
+                };
                 let found = constant_normal_force(&t, &profile, &config).map_err(|err| match err {
                     ForceError::NoContact { peak_n, .. } => LearnError::NoContact {
                         source_name: self.demo.source.clone(),
@@ -493,8 +574,10 @@ impl Learner<'_> {
                 let peak = applied.iter().map(|f| f.norm()).fold(0.0, f64::max);
                 self.require_contact(&decl.name, peak)?;
                 let config = force_dmp_config(*basis);
-                let dmp = Dmp::fit_points(&config, &t, &applied)
-                    .map_err(|source| LearnError::Dmp { name: decl.name.clone(), source })?;
+                let dmp = Dmp::fit_points(&config, &t, &applied).map_err(|source| LearnError::Dmp {
+                    name: decl.name.clone(),
+                    source,
+                })?;
                 let rms = force_rms(&dmp, &t, |k, channel| raw[k][channel]);
                 self.quality.forces_rms_n.insert(decl.name.clone(), rms);
                 LearnedForce::Dmp { dmp }
@@ -507,8 +590,10 @@ impl Learner<'_> {
                 let peak = profile.iter().copied().fold(0.0, f64::max);
                 self.require_contact(&decl.name, peak)?;
                 let config = force_dmp_config(*basis);
-                let dmp = fit_scalar(&config, &t, &profile)
-                    .map_err(|source| LearnError::Dmp { name: decl.name.clone(), source })?;
+                let dmp = fit_scalar(&config, &t, &profile).map_err(|source| LearnError::Dmp {
+                    name: decl.name.clone(),
+                    source,
+                })?;
                 let rms = force_rms(&dmp, &t, |k, _| raw[k]);
                 self.quality.forces_rms_n.insert(decl.name.clone(), rms);
                 LearnedForce::Magnitude { dmp }
@@ -532,7 +617,11 @@ fn without_friction(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>]
         .map(|k| {
             let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
             let dt = t[b] - t[a];
-            let velocity = if dt > 0.0 { (smoothed[b] - smoothed[a]) / dt } else { Vector3::zeros() };
+            let velocity = if dt > 0.0 {
+                (smoothed[b] - smoothed[a]) / dt
+            } else {
+                Vector3::zeros()
+            };
             let speed = velocity.norm();
             if speed < 0.005 {
                 force[k]
@@ -551,7 +640,11 @@ const FORCE_SMOOTHING_S: f64 = 0.04;
 /// The moving-average window for samples at times `t` (odd, at least 1).
 fn smoothing_window(t: &[f64]) -> usize {
     let duration = t.last().copied().unwrap_or(0.0) - t.first().copied().unwrap_or(0.0);
-    let rate = if duration > 0.0 { (t.len() - 1) as f64 / duration } else { 1.0 };
+    let rate = if duration > 0.0 {
+        (t.len() - 1) as f64 / duration
+    } else {
+        1.0
+    };
     ((FORCE_SMOOTHING_S * rate).round() as usize) | 1
 }
 
@@ -578,13 +671,20 @@ fn smooth(values: &[f64], window: usize) -> Vec<f64> {
 }
 
 fn smooth_points(points: &[Vector3<f64>], window: usize) -> Vec<Vector3<f64>> {
-    let channels: Vec<Vec<f64>> = (0..3).map(|c| smooth(&points.iter().map(|p| p[c]).collect::<Vec<_>>(), window)).collect();
-    (0..points.len()).map(|k| Vector3::new(channels[0][k], channels[1][k], channels[2][k])).collect()
+    let channels: Vec<Vec<f64>> = (0..3)
+        .map(|c| smooth(&points.iter().map(|p| p[c]).collect::<Vec<_>>(), window))
+        .collect();
+    (0..points.len())
+        .map(|k| Vector3::new(channels[0][k], channels[1][k], channels[2][k]))
+        .collect()
 }
 
 /// Force DMPs use the default (ridge) regression, which reproduces better than LWR.
 fn force_dmp_config(basis: u32) -> DmpConfig {
-    DmpConfig { n_basis: basis as usize, ..DmpConfig::default() }
+    DmpConfig {
+        n_basis: basis as usize,
+        ..DmpConfig::default()
+    }
 }
 
 /// RMS error of a force DMP's rollout at the demonstration's sample times [N].
@@ -596,7 +696,9 @@ fn force_rms(dmp: &Dmp, t: &[f64], demo: impl Fn(usize, usize) -> f64) -> f64 {
         if k > 0 {
             rollout.step(dmp, t[k] - t[k - 1]);
         }
-        let error: f64 = (0..dmp.n_dims()).map(|c| (rollout.position()[c] - demo(k, c)).powi(2)).sum();
+        let error: f64 = (0..dmp.n_dims())
+            .map(|c| (rollout.position()[c] - demo(k, c)).powi(2))
+            .sum();
         sum += error;
         count += 1.0;
     }
@@ -649,13 +751,13 @@ mod tests {
         // demonstrated velocity does.
         let t: Vec<f64> = (0..2320).map(|k| k as f64 * 0.001).collect();
         let mut rng = crate::rng::SplitMix64::new(1);
-        let raw: Vec<f64> = t.iter().map(|&t| 10.0 * (1.0 - (-t / 0.05).exp()) + 0.15 * rng.normal()).collect();
+        let raw: Vec<f64> = t
+            .iter()
+            .map(|&t| 10.0 * (1.0 - (-t / 0.05).exp()) + 0.15 * rng.normal())
+            .collect();
         let profile = smooth(&raw, smoothing_window(&t));
         let dmp = fit_scalar(&force_dmp_config(40), &t, &profile).expect("fits");
         let rms = force_rms(&dmp, &t, |k, _| raw[k]);
         assert!(rms < 0.5, "RMS {rms} N (5 % of the 10 N plateau)");
     }
 }
-
-
-

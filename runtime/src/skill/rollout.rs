@@ -31,7 +31,13 @@ pub fn preview(learned: &Learned, dt_s: f64, goal_offset_m: Vector3<f64>) -> (Ve
         names.push(name.clone());
         let mut position = motion.position.rollout();
         let mut orientation = motion.orientation.rollout();
-        let goal: Vec<f64> = motion.position.goal.iter().zip(goal_offset_m.iter()).map(|(g, o)| g + o).collect();
+        let goal: Vec<f64> = motion
+            .position
+            .goal
+            .iter()
+            .zip(goal_offset_m.iter())
+            .map(|(g, o)| g + o)
+            .collect();
         // Goals are validated finite by construction; a failure leaves the demonstrated goal.
         let _ = position.set_goal(&goal);
         if let Some((p, q)) = current {
@@ -46,7 +52,12 @@ pub fn preview(learned: &Learned, dt_s: f64, goal_offset_m: Vector3<f64>) -> (Ve
                 t += dt_s;
             }
             let p = Vector3::from_column_slice(position.position());
-            samples.push(PreviewSample { t_s: t, position_m: p, orientation: orientation.orientation(), motion: index });
+            samples.push(PreviewSample {
+                t_s: t,
+                position_m: p,
+                orientation: orientation.orientation(),
+                motion: index,
+            });
         }
         current = samples.last().map(|s| (s.position_m, s.orientation));
     }

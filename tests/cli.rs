@@ -291,3 +291,95 @@ fn learn_refuses_a_demonstration_without_contact_and_writes_nothing() {
     assert!(!learned.exists());
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn eval_results_do_not_depend_on_the_thread_count_and_a_broken_trial_is_reported() {
+    let dir = temp_dir("eval");
+    let trials = dir.join("trials.toml");
+    let root = env!("CARGO_MANIFEST_DIR");
+    std::fs::write(
+        &trials,
+        format!(
+            r#"
+[[skill]]
+file = "{root}/stdlib-skills/touch.skill"
+demo = "{root}/examples/demos/touch.csv"
+scene = "{root}/examples/scenes/table.toml"
+criteria = {{ stop_force_rel = 0.20 }}
+variants = [
+    {{ name = "as demonstrated", set = [] }},
+    {{ name = "farther", set = ["table.z=0.245"] }},
+    {{ name = "broken", set = ["table.nonsense=1"] }},
+]
+
+[[skill]]
+file = "{root}/stdlib-skills/press.skill"
+demo = "{root}/examples/demos/missing.csv"
+scene = "{root}/examples/scenes/button.toml"
+variants = [{{ name = "as demonstrated", set = [] }}]
+"#
+        ),
+    )
+    .expect("write trials");
+    let summaries: Vec<serde_json::Value> = ["1", "2"]
+        .iter()
+        .map(|threads| {
+            let out_dir = dir.join(format!("report{threads}"));
+            let out = skillc(&[
+                "eval",
+                "--trials",
+                trials.to_str().expect("utf8"),
+                "--threads",
+                threads,
+                "--out",
+                out_dir.to_str().expect("utf8"),
+            ]);
+            assert_eq!(out.status.code(), Some(1), "a broken trial makes the exit code 1");
+            assert!(out_dir.join("index.html").exists());
+            serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).expect("summary")).expect("JSON")
+        })
+        .collect();
+    let trials_of = |summary: &serde_json::Value| summary["trials"].clone();
+    assert_eq!(
+        trials_of(&summaries[0]),
+        trials_of(&summaries[1]),
+        "results differ with the thread count"
+    );
+    let rows = summaries[0]["trials"].as_array().expect("trials");
+    assert_eq!(
+        rows.len(),
+        8,
+        "3 touch variants and 1 press variant, each with its replay"
+    );
+    for row in rows {
+        for key in [
+            "skill",
+            "variant",
+            "mode",
+            "success",
+            "force_rms_rel",
+            "contact_share",
+            "peak_force_n",
+            "duration_s",
+        ] {
+            assert!(row.get(key).is_some(), "missing `{key}` in {row}");
+        }
+    }
+    let touch_ok = rows
+        .iter()
+        .filter(|r| r["skill"] == "touch" && r["mode"] == "skill" && r["success"] == true)
+        .count();
+    assert_eq!(touch_ok, 2, "the two good touch variants succeed: {rows:?}");
+    let broken = rows.iter().find(|r| r["variant"] == "broken").expect("broken row");
+    assert_eq!(broken["error"], true);
+    assert!(
+        broken["message"].as_str().expect("message").contains("nonsense"),
+        "{broken}"
+    );
+    let press = rows.iter().find(|r| r["skill"] == "press").expect("press row");
+    assert!(
+        press["message"].as_str().expect("message").contains("missing.csv"),
+        "{press}"
+    );
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

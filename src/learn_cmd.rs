@@ -22,10 +22,10 @@ pub struct LearnArgs {
     /// The skill to learn, when the file defines several.
     #[arg(long)]
     pub skill: Option<String>,
-    /// Low-pass cut-off [Hz], overriding the template's `lowpass`.
+    /// Low-pass cut-off \[Hz\], overriding the template's `lowpass`.
     #[arg(long, value_name = "HZ")]
     pub lowpass: Option<f64>,
-    /// Resampling rate [Hz], overriding the template's `resample`.
+    /// Resampling rate \[Hz\], overriding the template's `resample`.
     #[arg(long, value_name = "HZ")]
     pub resample: Option<f64>,
     /// Also draw what was learned into this folder (SVG): the demonstration against the
@@ -282,7 +282,7 @@ pub struct RolloutArgs {
     /// Move every motion goal by DX,DY,DZ metres (base frame).
     #[arg(long, value_name = "DX,DY,DZ", value_delimiter = ',', allow_hyphen_values = true)]
     pub goal_offset: Option<Vec<f64>>,
-    /// Sample period [s].
+    /// Sample period \[s\].
     #[arg(long, default_value_t = 0.001)]
     pub dt: f64,
 }

@@ -1,4 +1,4 @@
-//! `skillc robot URDF [--tool LINK] [--q Q1,...,Qn] [--json]`: inspect a robot description.
+//! `skillc robot URDF \[--tool LINK\] \[--q Q1,...,Qn\] \[--json\]`: inspect a robot description.
 
 use std::io::Write as _;
 use std::path::PathBuf;

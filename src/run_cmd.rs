@@ -153,13 +153,13 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
 pub struct StateStats {
     /// Ticks in the state.
     pub ticks: usize,
-    /// Mean applied force along the compliant z [N].
+    /// Mean applied force along the compliant z \[N\].
     pub mean_n: f64,
-    /// Largest applied force along the compliant z [N].
+    /// Largest applied force along the compliant z \[N\].
     pub max_n: f64,
-    /// RMS of (desired − applied) along z on force-controlled ticks [N], if any.
+    /// RMS of (desired − applied) along z on force-controlled ticks \[N\], if any.
     pub rms_error_n: Option<f64>,
-    /// Mean desired force along z on force-controlled ticks [N], if any.
+    /// Mean desired force along z on force-controlled ticks \[N\], if any.
     pub mean_desired_n: Option<f64>,
 }
 

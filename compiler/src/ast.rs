@@ -143,7 +143,7 @@ pub struct Stmt {
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum StmtKind {
-    /// `move MOTION [from current]`.
+    /// `move MOTION \[from current\]`.
     Move {
         /// The motion name.
         motion: Ident,

@@ -1,6 +1,6 @@
 //! The skillc front end: parse `.skill` templates, check them, and lower them to the IR.
 //!
-//! The stages are [`syntax::parse`] (text to [`ast`]), [`check`] (names, units, segments,
+//! The stages are [`syntax::parse`] (text to [`ast`]), `check` (names, units, segments,
 //! axes, the state machine) and lowering into [`skill_ir::Program`]. All of it is pure: the
 //! caller supplies file contents, including those of imported files through a loader, so
 //! this crate never touches the file system.
@@ -23,7 +23,7 @@ pub use source::{SourceFile, Span};
 use skill_ir as ir;
 use std::collections::HashMap;
 
-/// Largest source file accepted [bytes]. Templates are a few kilobytes; anything near this
+/// Largest source file accepted, in bytes. Templates are a few kilobytes; anything near this
 /// is the wrong file, and refusing it keeps `check` fast on any input.
 pub const MAX_SOURCE_BYTES: usize = 1 << 20;
 

@@ -132,9 +132,9 @@ pub struct LearnPlan {
     pub segmentation: Segmentation,
     /// The number of segments the skill needs; learning fails when it finds another count.
     pub segments: u32,
-    /// Low-pass cut-off applied to the demonstration before learning [Hz], if any.
+    /// Low-pass cut-off applied to the demonstration before learning \[Hz\], if any.
     pub lowpass_hz: Option<f64>,
-    /// Resampling rate applied before learning [Hz], if any.
+    /// Resampling rate applied before learning \[Hz\], if any.
     pub resample_hz: Option<f64>,
     /// Compliant frames to learn.
     pub frames: Vec<FrameDecl>,
@@ -162,14 +162,14 @@ pub enum Segmentation {
         temporal: Temporal,
         /// Where the dendrogram is cut.
         cut: Cut,
-        /// Segments shorter than this are merged into a neighbour [s].
+        /// Segments shorter than this are merged into a neighbour \[s\].
         min_length_s: f64,
         /// The demonstration channels clustered.
         features: SegmentFeatures,
     },
     /// Change-point detection in the style of CHAMP (Niekum et al. 2015).
     Changepoint {
-        /// Minimum segment length [s].
+        /// Minimum segment length \[s\].
         min_length_s: f64,
         /// Candidate models for a segment.
         models: Vec<SegmentModel>,
@@ -315,7 +315,7 @@ pub enum FrameSource {
     },
     /// A literal frame in the robot base frame.
     Fixed {
-        /// Origin [m], base frame.
+        /// Origin \[m\], base frame.
         origin_m: [f64; 3],
         /// Orientation as a unit quaternion `[w, x, y, z]`, base frame.
         quaternion_wxyz: [f64; 4],
@@ -453,9 +453,9 @@ pub enum ForceSource {
         /// Basis functions.
         basis: u32,
     },
-    /// A literal force [N] along the z axis of the state's control frame.
+    /// A literal force \[N\] along the z axis of the state's control frame.
     Literal {
-        /// The force [N].
+        /// The force \[N\].
         value_n: f64,
     },
     /// No desired force: force-controlled axes regulate to zero (pure compliance) and the
@@ -478,7 +478,7 @@ pub struct ThresholdDecl {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ThresholdSource {
-    /// `scale` times the applied force along `along` at `point` [N].
+    /// `scale` times the applied force along `along` at `point` \[N\].
     ForceAt {
         /// The point.
         point: Point,
@@ -487,7 +487,7 @@ pub enum ThresholdSource {
         /// Multiplier on the learned value.
         scale: f64,
     },
-    /// A literal value [N or Nm].
+    /// A literal value \[N or Nm\].
     Literal {
         /// The value in SI units.
         value: f64,
@@ -560,9 +560,9 @@ pub struct ActiveState {
 pub struct ForceGains {
     /// Proportional gain on the force error [dimensionless: N of command per N of error].
     pub kp: f64,
-    /// Integral gain [1/s].
+    /// Integral gain \[1/s\].
     pub ki: f64,
-    /// Clamp on each component of the integral term [N]; `None` leaves it unbounded.
+    /// Clamp on each component of the integral term \[N\]; `None` leaves it unbounded.
     pub integral_limit_n: Option<f64>,
 }
 
@@ -578,7 +578,7 @@ pub enum EntryAction {
     ShiftGoal {
         /// The direction.
         along: FrameAxis,
-        /// The distance [m] (negative moves against the axis).
+        /// The distance \[m\] (negative moves against the axis).
         distance_m: f64,
     },
 }
@@ -615,9 +615,9 @@ pub enum TransitionAction {
     Extend {
         /// The direction.
         along: FrameAxis,
-        /// Speed of the goal [m/s].
+        /// Speed of the goal \[m/s\].
         speed_mps: f64,
-        /// Total extension bound [m].
+        /// Total extension bound \[m\].
         max_m: f64,
         /// The state entered when the bound is exhausted.
         then: StateId,
@@ -657,17 +657,17 @@ pub enum Guard {
     MotionDone,
     /// Every force-controlled axis is within `tolerance_n` of its desired force.
     ForceReached {
-        /// Tolerance [N].
+        /// Tolerance \[N\].
         tolerance_n: f64,
     },
     /// At least `duration_s` has passed since the state was entered.
     Dwell {
-        /// Duration [s].
+        /// Duration \[s\].
         duration_s: f64,
     },
     /// Like `Dwell`, but reported as a timeout when it fires.
     Timeout {
-        /// Duration [s].
+        /// Duration \[s\].
         duration_s: f64,
     },
 }
@@ -712,7 +712,7 @@ pub enum Threshold {
         /// The force.
         id: ForceId,
     },
-    /// A literal [N or Nm].
+    /// A literal \[N or Nm\].
     Literal {
         /// The value.
         value: f64,
@@ -769,7 +769,7 @@ pub struct Overrides {
     pub force_scale: f64,
     /// Multiplier on motion speed (2 runs twice as fast).
     pub speed_factor: f64,
-    /// Offset added to every motion goal [m], base frame.
+    /// Offset added to every motion goal \[m\], base frame.
     pub goal_offset_m: [f64; 3],
 }
 

@@ -24,16 +24,16 @@ use std::fmt::Write as _;
 use crate::rng::SplitMix64;
 use crate::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
 
-/// The scenes' start configuration [rad] (`examples/scenes/*.toml`, `robot.q0`).
+/// The scenes' start configuration \[rad\] (`examples/scenes/*.toml`, `robot.q0`).
 pub const SCENE_Q0: [f64; 7] = [0.0, -0.5, 0.0, 1.5, 0.0, -1.141_592_653_589_793_1, 0.0];
 
-/// Radius of the probe's spherical tip [m].
+/// Radius of the probe's spherical tip \[m\].
 pub const TIP_RADIUS_M: f64 = 0.01;
 
-/// Sampling rate of the generated demonstrations [Hz].
+/// Sampling rate of the generated demonstrations \[Hz\].
 pub const RATE_HZ: f64 = 1000.0;
 
-/// Height of the table top, the button cap and the drum's top in the shipped scenes [m].
+/// Height of the table top, the button cap and the drum's top in the shipped scenes \[m\].
 pub const SURFACE_Z_M: f64 = 0.300;
 
 /// The four standard skills.
@@ -87,15 +87,15 @@ impl StdSkill {
 /// One sample of a demonstration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
-    /// Time [s].
+    /// Time \[s\].
     pub t_s: f64,
-    /// Flange position, base frame [m].
+    /// Flange position, base frame \[m\].
     pub position_m: Vector3<f64>,
     /// Flange orientation, base frame.
     pub orientation: UnitQuaternion<f64>,
-    /// Force the environment exerts on the tool, base frame [N].
+    /// Force the environment exerts on the tool, base frame \[N\].
     pub force_n: Vector3<f64>,
-    /// Moment of that force about the flange, base frame [N m].
+    /// Moment of that force about the flange, base frame \[N m\].
     pub torque_nm: Vector3<f64>,
 }
 
@@ -104,9 +104,9 @@ pub struct Sample {
 pub struct TruthSegment {
     /// What the person was doing.
     pub label: String,
-    /// Start [s].
+    /// Start \[s\].
     pub start_s: f64,
-    /// End [s].
+    /// End \[s\].
     pub end_s: f64,
 }
 
@@ -116,18 +116,18 @@ pub struct TruthSegment {
 pub enum TruthSurface {
     /// A plane: a point on it and its outward normal.
     Plane {
-        /// A point on the plane [m].
+        /// A point on the plane \[m\].
         point_m: [f64; 3],
         /// Outward normal (from the surface towards the tool).
         normal: [f64; 3],
     },
     /// A cylinder: a point on its axis, the axis direction and the radius.
     Cylinder {
-        /// A point on the axis [m].
+        /// A point on the axis \[m\].
         axis_point_m: [f64; 3],
         /// Unit axis direction.
         axis: [f64; 3],
-        /// Radius [m].
+        /// Radius \[m\].
         radius_m: f64,
     },
 }
@@ -141,26 +141,26 @@ pub struct GroundTruth {
     pub scene: String,
     /// The generator seed.
     pub seed: u64,
-    /// Sampling rate [Hz].
+    /// Sampling rate \[Hz\].
     pub rate_hz: f64,
-    /// The probe tip centre in the flange frame [m].
+    /// The probe tip centre in the flange frame \[m\].
     pub tip_in_flange_m: [f64; 3],
-    /// Tip radius [m].
+    /// Tip radius \[m\].
     pub tip_radius_m: f64,
     /// Phases in time order.
     pub segments: Vec<TruthSegment>,
     /// The surface.
     pub surface: TruthSurface,
-    /// The characteristic applied force [N]: the constant force (slide), the peak (touch,
+    /// The characteristic applied force \[N\]: the constant force (slide), the peak (touch,
     /// press) or the mean along the normal while contouring.
     pub force_n: f64,
-    /// Time of the force peak [s] (touch: the contact point).
+    /// Time of the force peak \[s\] (touch: the contact point).
     pub peak_time_s: f64,
     /// Coulomb friction coefficient used.
     pub friction: f64,
-    /// Standard deviation of the sensor's force noise [N].
+    /// Standard deviation of the sensor's force noise \[N\].
     pub sensor_noise_n: f64,
-    /// The constant sensor bias added to the force [N].
+    /// The constant sensor bias added to the force \[N\].
     pub sensor_bias_n: [f64; 3],
 }
 
@@ -238,15 +238,15 @@ impl Wobble {
 /// The state of the tip at one instant, before noise and the flange transform.
 #[derive(Debug, Clone, Copy)]
 struct TipState {
-    /// Tip centre [m].
+    /// Tip centre \[m\].
     position: Vector3<f64>,
     /// Outward surface normal at the contact (meaningful when `normal_force > 0`).
     normal: Vector3<f64>,
-    /// Normal force the surface exerts on the tool [N] (0 in free space).
+    /// Normal force the surface exerts on the tool \[N\] (0 in free space).
     normal_force: f64,
 }
 
-/// A phase of the demonstration: a duration and the tip state over local progress `u ∈ [0, 1]`.
+/// A phase of the demonstration: a duration and the tip state over local progress `u ∈ \[0, 1\]`.
 struct Phase {
     label: &'static str,
     duration_s: f64,

@@ -8,7 +8,7 @@ use skill_ir as ir;
 use skill_runtime::exec::{RunLog, Tick};
 use skill_runtime::skill::{Learned, LearnedForce};
 
-/// Ticks after the start of a contact visit that are not judged (settling) [s].
+/// Ticks after the start of a contact visit that are not judged (settling) \[s\].
 pub const SETTLE_S: f64 = 0.2;
 
 /// What a trial measured.
@@ -19,11 +19,11 @@ pub struct Metrics {
     pub force_rms_rel: Option<f64>,
     /// Share of the contact phase with the applied force above contact level.
     pub contact_share: Option<f64>,
-    /// Largest applied force magnitude after pre-positioning [N].
+    /// Largest applied force magnitude after pre-positioning \[N\].
     pub peak_force_n: f64,
-    /// The applied force along the compliant z when the contact phase ended [N] (touch).
+    /// The applied force along the compliant z when the contact phase ended \[N\] (touch).
     pub stop_force_n: Option<f64>,
-    /// Distance between measured and commanded tool position at the end [m].
+    /// Distance between measured and commanded tool position at the end \[m\].
     pub goal_error_m: f64,
     /// Ticks judged in the contact phase.
     pub contact_ticks: usize,
@@ -99,7 +99,7 @@ impl ContactPlan {
     }
 }
 
-/// The desired force of a learned force `t` seconds into its phase [N] (magnitude along z;
+/// The desired force of a learned force `t` seconds into its phase \[N\] (magnitude along z;
 /// for a force vector, its magnitude).
 pub fn desired_at(force: &LearnedForce, t: f64) -> f64 {
     match force {

@@ -117,15 +117,15 @@ pub struct TrialResult {
     pub force_rms_rel: Option<f64>,
     /// Share of the contact phase in contact.
     pub contact_share: Option<f64>,
-    /// Peak applied force [N].
+    /// Peak applied force \[N\].
     pub peak_force_n: f64,
-    /// Final contact force [N] (touch).
+    /// Final contact force \[N\] (touch).
     pub stop_force_n: Option<f64>,
-    /// The learned contact force it is judged against [N].
+    /// The learned contact force it is judged against \[N\].
     pub learned_force_n: Option<f64>,
-    /// Position error at the goal [m].
+    /// Position error at the goal \[m\].
     pub goal_error_m: f64,
-    /// Simulated duration [s].
+    /// Simulated duration \[s\].
     pub duration_s: f64,
     /// How the run ended, or why it could not run.
     pub message: String,

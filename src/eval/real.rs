@@ -23,13 +23,13 @@ pub struct RealResult {
     pub samples: usize,
     /// Why it was skipped or failed, if it was.
     pub skipped: Option<String>,
-    /// Boundaries found [s].
+    /// Boundaries found \[s\].
     pub found_boundaries_s: Vec<f64>,
-    /// Boundaries of the authors' labels [s], if a labels file lists the demonstration.
+    /// Boundaries of the authors' labels \[s\], if a labels file lists the demonstration.
     pub label_boundaries_s: Vec<f64>,
-    /// Per label boundary, the distance to the nearest found boundary [s].
+    /// Per label boundary, the distance to the nearest found boundary \[s\].
     pub boundary_errors_s: Vec<f64>,
-    /// The learned constant force [N].
+    /// The learned constant force \[N\].
     pub force_n: Option<f64>,
     /// The learned plane's normal (into the surface), base frame.
     pub plane_z: Option<[f64; 3]>,

@@ -6,7 +6,7 @@ use super::basis::Basis;
 use super::{DmpError, Regression};
 
 /// Fits one weight vector per target channel. `phases[t]` is the phase of sample `t`,
-/// `times[t]` its time as a fraction of `τ`, and `targets[c][t]` the forcing-term value channel
+/// `times[t]` its time as a fraction of `τ`, and `targets[c]\[t\]` the forcing-term value channel
 /// `c` must produce there.
 pub(crate) fn fit_weights(
     basis: &Basis,

@@ -40,7 +40,7 @@ pub struct QuatDmp {
     pub start: UnitQuaternion<f64>,
     /// Demonstrated goal orientation (base frame).
     pub goal: UnitQuaternion<f64>,
-    /// Forcing-term weights for the three tangent-space components, `weights[axis][basis]`.
+    /// Forcing-term weights for the three tangent-space components, `weights[axis]\[basis\]`.
     pub weights: Vec<Vec<f64>>,
 }
 
@@ -168,7 +168,7 @@ impl QuatRollout {
         self.q
     }
 
-    /// Current angular velocity `ω = η / τ` [rad/s], base frame.
+    /// Current angular velocity `ω = η / τ` \[rad/s\], base frame.
     pub fn angular_velocity(&self) -> Vector3<f64> {
         self.eta / self.tau_s
     }

@@ -60,7 +60,7 @@ pub struct Dmp {
     pub start: Vec<f64>,
     /// Demonstrated goal, one value per channel.
     pub goal: Vec<f64>,
-    /// Forcing-term weights, `weights[channel][basis]`.
+    /// Forcing-term weights, `weights[channel]\[basis\]`.
     pub weights: Vec<Vec<f64>>,
     /// Demonstrated initial velocity `ẋ(0)`, one value per channel (units per second).
     /// A rollout from the demonstrated start begins with it, so that profiles that start
@@ -70,7 +70,7 @@ pub struct Dmp {
 }
 
 impl Dmp {
-    /// Learns a DMP from `channels[c][k]` sampled at times `t_s[k]` (any spacing).
+    /// Learns a DMP from `channels[c]\[k\]` sampled at times `t_s[k]` (any spacing).
     pub fn fit(config: &DmpConfig, t_s: &[f64], channels: &[&[f64]]) -> Result<Self, DmpError> {
         config.validate()?;
         check_times(t_s, "trajectory")?;
@@ -175,7 +175,7 @@ impl Dmp {
     }
 
     /// Convenience: rolls out from the demonstrated start for `duration_s` at step `dt_s` and
-    /// returns the sampled positions `out[k][channel]` at `t = k dt` (including `t = 0`).
+    /// returns the sampled positions `out[k]\[channel\]` at `t = k dt` (including `t = 0`).
     pub fn reproduce(&self, dt_s: f64, duration_s: f64) -> Vec<Vec<f64>> {
         let mut rollout = self.rollout();
         let steps = (duration_s / dt_s).round() as usize;

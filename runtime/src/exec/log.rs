@@ -5,13 +5,13 @@ use std::fmt::Write as _;
 /// One control tick.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tick {
-    /// Time since the run started [s].
+    /// Time since the run started \[s\].
     pub t_s: f64,
     /// Index into [`RunLog::states`].
     pub state: u32,
-    /// Commanded tool position [m] and orientation `[w, x, y, z]`, base frame.
+    /// Commanded tool position \[m\] and orientation `[w, x, y, z]`, base frame.
     pub desired: [f64; 7],
-    /// Measured tool position [m] and orientation `[w, x, y, z]`, base frame.
+    /// Measured tool position \[m\] and orientation `[w, x, y, z]`, base frame.
     pub measured: [f64; 7],
     /// Applied wrench at the tool point, base frame `[f; m]` (N, N m).
     pub wrench_base: [f64; 6],
@@ -23,7 +23,7 @@ pub struct Tick {
     pub frame_z: [f64; 3],
     /// Position-controlled axes as bits (bit i = axis i of `x y z rx ry rz`).
     pub selection: u8,
-    /// Commanded joint torques after limits [N m].
+    /// Commanded joint torques after limits \[N m\].
     pub torques: Vec<f64>,
 }
 

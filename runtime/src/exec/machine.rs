@@ -14,9 +14,9 @@ use crate::skill::{Learned, LearnedForce};
 /// How a run is carried out.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExecOptions {
-    /// Control period [s] (1 ms, as on the LWR's fast research interface).
+    /// Control period \[s\] (1 ms, as on the LWR's fast research interface).
     pub dt_s: f64,
-    /// A run longer than this fails [s].
+    /// A run longer than this fails \[s\].
     pub max_duration_s: f64,
     /// Task overrides (force scale, speed, goal offset).
     pub overrides: ir::Overrides,
@@ -76,9 +76,9 @@ pub enum ExecError {
 pub struct Visit {
     /// The state's name.
     pub state: String,
-    /// Entry [s].
+    /// Entry \[s\].
     pub enter_s: f64,
-    /// Exit [s].
+    /// Exit \[s\].
     pub exit_s: f64,
 }
 
@@ -93,7 +93,7 @@ pub struct RunReport {
     pub message: String,
     /// States in the order visited.
     pub visits: Vec<Visit>,
-    /// Run time [s].
+    /// Run time \[s\].
     pub duration_s: f64,
 }
 
@@ -139,7 +139,7 @@ impl<'p> Rig<'p> {
         })
     }
 
-    /// Run time so far [s].
+    /// Run time so far \[s\].
     pub fn time_s(&self) -> f64 {
         self.t_s
     }

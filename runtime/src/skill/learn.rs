@@ -24,9 +24,9 @@ use crate::learn::segment::{
 /// Options of `skillc learn` that override the template.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LearnOptions {
-    /// Low-pass cut-off [Hz], replacing the template's `lowpass`.
+    /// Low-pass cut-off \[Hz\], replacing the template's `lowpass`.
     pub lowpass_hz: Option<f64>,
-    /// Resampling rate [Hz], replacing the template's `resample`.
+    /// Resampling rate \[Hz\], replacing the template's `resample`.
     pub resample_hz: Option<f64>,
 }
 
@@ -75,7 +75,7 @@ pub enum LearnError {
         source_name: String,
         /// The feature that needs contact.
         name: String,
-        /// The largest force magnitude found [N].
+        /// The largest force magnitude found \[N\].
         peak_n: f64,
     },
     /// Fitting a frame failed.
@@ -107,7 +107,7 @@ pub enum LearnError {
     },
 }
 
-/// Forces below this are not contact [N].
+/// Forces below this are not contact \[N\].
 const CONTACT_N: f64 = 1.0;
 
 /// Per-sample frames are stored every this many seconds.
@@ -382,7 +382,7 @@ impl Learner<'_> {
         rotation * unit
     }
 
-    /// The applied force (robot on environment) along a frame axis at sample `index` [N].
+    /// The applied force (robot on environment) along a frame axis at sample `index` \[N\].
     fn applied_along(&self, index: usize, along: ir::FrameAxis) -> f64 {
         -self.demo.force_n[index].dot(&self.axis_at(index, along))
     }
@@ -687,7 +687,7 @@ fn force_dmp_config(basis: u32) -> DmpConfig {
     }
 }
 
-/// RMS error of a force DMP's rollout at the demonstration's sample times [N].
+/// RMS error of a force DMP's rollout at the demonstration's sample times \[N\].
 fn force_rms(dmp: &Dmp, t: &[f64], demo: impl Fn(usize, usize) -> f64) -> f64 {
     let mut rollout = dmp.rollout();
     let mut sum = 0.0;

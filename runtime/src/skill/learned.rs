@@ -60,7 +60,7 @@ pub struct Learned {
     pub motions: BTreeMap<String, LearnedMotion>,
     /// Desired forces by name.
     pub forces: BTreeMap<String, LearnedForce>,
-    /// Thresholds by name [N or N m].
+    /// Thresholds by name \[N or N m\].
     pub thresholds: BTreeMap<String, LearnedThreshold>,
     /// How well the features reproduce the demonstration.
     pub quality: Quality,
@@ -73,9 +73,9 @@ pub struct DemoInfo {
     pub source: String,
     /// Number of samples used (after preprocessing).
     pub samples: usize,
-    /// Duration [s].
+    /// Duration \[s\].
     pub duration_s: f64,
-    /// Mean sampling rate [Hz].
+    /// Mean sampling rate \[Hz\].
     pub rate_hz: f64,
     /// Warnings raised while reading it.
     pub warnings: Vec<String>,
@@ -84,9 +84,9 @@ pub struct DemoInfo {
 /// One segment of the demonstration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LearnedSegment {
-    /// Start time [s], demonstration clock.
+    /// Start time \[s\], demonstration clock.
     pub start_s: f64,
-    /// End time [s] (time of the last sample).
+    /// End time \[s\] (time of the last sample).
     pub end_s: f64,
     /// First sample index.
     pub start_index: usize,
@@ -100,11 +100,11 @@ pub struct FramePose {
     /// How it was obtained: a constraint model (`planar`, `concentric_cylinder`, ...),
     /// `force_aligned`, or `fixed`.
     pub kind: String,
-    /// Origin [m].
+    /// Origin \[m\].
     pub origin: [f64; 3],
     /// Orientation `[w, x, y, z]`.
     pub quaternion_wxyz: [f64; 4],
-    /// Time from the start of the frame's segment [s], for per-sample frames.
+    /// Time from the start of the frame's segment \[s\], for per-sample frames.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub t_s: Option<f64>,
 }
@@ -166,7 +166,7 @@ impl LearnedFrame {
 pub struct LearnedMotion {
     /// The segment (0-based).
     pub segment: usize,
-    /// Position DMP, 3 channels [m], base frame.
+    /// Position DMP, 3 channels \[m\], base frame.
     pub position: Dmp,
     /// Orientation DMP, base frame.
     pub orientation: QuatDmp,
@@ -178,22 +178,22 @@ pub struct LearnedMotion {
 pub enum LearnedForce {
     /// Constant from the lowest-variance in-contact region.
     Constant {
-        /// The force [N].
+        /// The force \[N\].
         value_n: f64,
-        /// Its standard deviation over the region [N].
+        /// Its standard deviation over the region \[N\].
         std_n: f64,
         /// From the start of the first to the end of the last low-variance region averaged
-        /// [s], demonstration time.
+        /// \[s\], demonstration time.
         region_s: [f64; 2],
     },
     /// The force at a point.
     At {
-        /// The force [N].
+        /// The force \[N\].
         value_n: f64,
     },
     /// A literal.
     Literal {
-        /// The force [N].
+        /// The force \[N\].
         value_n: f64,
     },
     /// No desired force (pure compliance on force axes).
@@ -201,12 +201,12 @@ pub enum LearnedForce {
         /// Always 0.
         value_n: f64,
     },
-    /// DMPs of the applied force vector [N], base frame.
+    /// DMPs of the applied force vector \[N\], base frame.
     Dmp {
         /// 3 channels.
         dmp: Dmp,
     },
-    /// A DMP of the force magnitude along a frame axis [N].
+    /// A DMP of the force magnitude along a frame axis \[N\].
     Magnitude {
         /// 1 channel.
         dmp: Dmp,
@@ -229,7 +229,7 @@ impl LearnedForce {
 /// A learned threshold.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LearnedThreshold {
-    /// The value [N or N m].
+    /// The value \[N or N m\].
     pub value: f64,
 }
 
@@ -238,7 +238,7 @@ pub struct LearnedThreshold {
 pub struct Quality {
     /// Per motion: RMS error of the DMP rollout against the demonstration.
     pub motions: BTreeMap<String, MotionQuality>,
-    /// Per DMP force: RMS error of the rollout [N].
+    /// Per DMP force: RMS error of the rollout \[N\].
     pub forces_rms_n: BTreeMap<String, f64>,
     /// Per fitted frame: the constraint fits (every candidate, the chosen one marked).
     pub constraints: BTreeMap<String, Vec<ConstraintQuality>>,
@@ -247,9 +247,9 @@ pub struct Quality {
 /// How well a motion reproduces its segment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MotionQuality {
-    /// RMS position error per axis x, y, z [m].
+    /// RMS position error per axis x, y, z \[m\].
     pub position_rms_m: [f64; 3],
-    /// RMS orientation error [rad].
+    /// RMS orientation error \[rad\].
     pub orientation_rms_rad: f64,
 }
 
@@ -258,9 +258,9 @@ pub struct MotionQuality {
 pub struct ConstraintQuality {
     /// The model.
     pub kind: String,
-    /// RMS position residual [m].
+    /// RMS position residual \[m\].
     pub residual_m: f64,
-    /// RMS orientation residual [rad].
+    /// RMS orientation residual \[rad\].
     pub residual_rad: f64,
     /// Agreement of the forces with the constrained directions, 0..1.
     pub force_agreement: f64,

@@ -8,9 +8,9 @@ use super::learned::Learned;
 /// One preview sample: flange pose and the learned desired force at that time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreviewSample {
-    /// Time from the start of the preview [s].
+    /// Time from the start of the preview \[s\].
     pub t_s: f64,
-    /// Flange position [m], base frame.
+    /// Flange position \[m\], base frame.
     pub position_m: Vector3<f64>,
     /// Flange orientation, base frame.
     pub orientation: UnitQuaternion<f64>,

@@ -383,3 +383,9 @@ variants = [{{ name = "as demonstrated", set = [] }}]
     );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn the_shipped_demonstrations_are_what_the_generator_makes() {
+    let out = skillc(&["demos", "--check", "--out", "examples/demos"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+}

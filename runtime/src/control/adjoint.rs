@@ -5,8 +5,8 @@
 //! the control frame given by rotation `R` and translation `p`:
 //!
 //! ```text
-//! Ad  = [[R, p̂R], [0, R]]     maps compliant-frame twists to control-frame twists
-//! Adg = Ad⁻ᵀ = [[R, 0], [p̂R, R]]   maps compliant-frame wrenches to control-frame wrenches
+//! Ad  = [[R, p̂R], \[0, R\]]     maps compliant-frame twists to control-frame twists
+//! Adg = Ad⁻ᵀ = [\[R, 0\], [p̂R, R]]   maps compliant-frame wrenches to control-frame wrenches
 //! Ω   = Adg K S Ad⁻¹          pose error (control frame) → restoring wrench (control frame)
 //! Ω̃   = Adg S̃ Adg⁻¹          force error (control frame) → selected force error (control frame)
 //! ```
@@ -52,7 +52,11 @@ pub fn wrench_adjoint_inverse(pose: &Isometry3<f64>) -> Matrix6<f64> {
 
 /// Ω = Adg K S Ad⁻¹ and Ω̃ = Adg S̃ Adg⁻¹ for a compliant frame at `frame_in_control`,
 /// with the selection (`true` = position-controlled) and stiffness given per compliant-frame axis.
-pub fn operators(frame_in_control: &Isometry3<f64>, position: &[bool; 6], stiffness: &[f64; 6]) -> (Matrix6<f64>, Matrix6<f64>) {
+pub fn operators(
+    frame_in_control: &Isometry3<f64>,
+    position: &[bool; 6],
+    stiffness: &[f64; 6],
+) -> (Matrix6<f64>, Matrix6<f64>) {
     let ad_inv = adjoint_inverse(frame_in_control);
     let adg = ad_inv.transpose();
     let adg_inv = adjoint(frame_in_control).transpose();
@@ -140,7 +144,10 @@ mod tests {
 
     #[test]
     fn all_position_makes_omega_tilde_vanish_and_omega_the_transformed_stiffness() {
-        let g = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_euler_angles(0.3, 0.2, -0.1));
+        let g = Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_euler_angles(0.3, 0.2, -0.1),
+        );
         let (omega, omega_tilde) = operators(&g, &[true; 6], &[800.0, 800.0, 800.0, 50.0, 50.0, 50.0]);
         assert!(omega_tilde.norm() < 1e-12);
         // Isotropic stiffness per block is invariant under rotation.

@@ -12,11 +12,11 @@ use crate::robot::{Robot, RobotData, RobotError};
 pub struct ControllerGains {
     /// Damping ratio of the position-controlled axes: `D = 2 ζ √(K m)`.
     pub damping_ratio: f64,
-    /// Nominal effective mass for translational damping [kg].
+    /// Nominal effective mass for translational damping \[kg\].
     pub effective_mass_kg: f64,
-    /// Nominal effective inertia for rotational damping [kg m²].
+    /// Nominal effective inertia for rotational damping \[kg m²\].
     pub effective_inertia_kgm2: f64,
-    /// Upper bound of the rotational damping [N m s/rad]. The LWR-IV's last joint is light (the
+    /// Upper bound of the rotational damping \[N m s/rad\]. The LWR-IV's last joint is light (the
     /// effective inertia about the tool axis is a few 1e-4 kg m²), and damping computed from the
     /// last tick's velocity is explicit: at 1 kHz, 0.8 N m s/rad made the wrist oscillate in
     /// simulation and 0.6 held; the default keeps a margin.
@@ -24,15 +24,15 @@ pub struct ControllerGains {
     /// Damping of force-controlled translations [N s/m]: bounds the speed of free motion under
     /// a force command to `f / d`.
     pub force_axis_damping: f64,
-    /// Damping of force-controlled rotations [N m s/rad].
+    /// Damping of force-controlled rotations \[N m s/rad\].
     pub force_axis_rotational_damping: f64,
-    /// Null-space posture stiffness [N m/rad].
+    /// Null-space posture stiffness \[N m/rad\].
     pub nullspace_stiffness: f64,
-    /// Null-space posture damping [N m s/rad].
+    /// Null-space posture damping \[N m s/rad\].
     pub nullspace_damping: f64,
     /// Fraction of each joint's velocity limit above which braking starts.
     pub velocity_limit_fraction: f64,
-    /// Braking gain on the excess joint velocity [N m s/rad].
+    /// Braking gain on the excess joint velocity \[N m s/rad\].
     pub velocity_brake_gain: f64,
 }
 
@@ -68,11 +68,11 @@ pub struct Command {
     pub position: [bool; 6],
     /// Stiffness per compliant-frame axis: N/m, N m/rad.
     pub stiffness: [f64; 6],
-    /// Proportional force gain [-].
+    /// Proportional force gain \[-\].
     pub kp: f64,
-    /// Integral force gain [1/s].
+    /// Integral force gain \[1/s\].
     pub ki: f64,
-    /// Clamp of each integral component [N or N m]; `None` leaves it unbounded.
+    /// Clamp of each integral component \[N or N m\]; `None` leaves it unbounded.
     pub integral_limit: Option<f64>,
 }
 
@@ -142,7 +142,11 @@ impl HybridController {
             posture: DVector::zeros(n),
             integral_cf: Vector6::zeros(),
             bias_sensor: Vector6::zeros(),
-            state: ControlState { tool: Isometry3::identity(), twist: Vector6::zeros(), applied: Vector6::zeros() },
+            state: ControlState {
+                tool: Isometry3::identity(),
+                twist: Vector6::zeros(),
+                applied: Vector6::zeros(),
+            },
             robot,
         })
     }
@@ -195,7 +199,11 @@ impl HybridController {
         let mut applied = Vector6::zeros();
         applied.fixed_rows_mut::<3>(0).copy_from(&(-force));
         applied.fixed_rows_mut::<3>(3).copy_from(&(-moment_tool));
-        self.state = ControlState { tool, twist: Vector6::from_iterator(twist.iter().copied()), applied };
+        self.state = ControlState {
+            tool,
+            twist: Vector6::from_iterator(twist.iter().copied()),
+            applied,
+        };
         &self.state
     }
 
@@ -223,7 +231,8 @@ impl HybridController {
         let mut e_p = Vector6::zeros();
         e_p.fixed_rows_mut::<3>(0)
             .copy_from(&(cmd.pose.translation.vector - state.tool.translation.vector));
-        e_p.fixed_rows_mut::<3>(3).copy_from(&rotation_error(&cmd.pose.rotation, &state.tool.rotation));
+        e_p.fixed_rows_mut::<3>(3)
+            .copy_from(&rotation_error(&cmd.pose.rotation, &state.tool.rotation));
 
         // Damping in the compliant frame, moved to the control frame like the stiffness.
         let mut d_cf = Matrix6::zeros();
@@ -231,7 +240,11 @@ impl HybridController {
         for axis in 0..6 {
             let rotation = axis >= 3;
             d_cf[(axis, axis)] = if cmd.position[axis] {
-                let mass = if rotation { gains.effective_inertia_kgm2 } else { gains.effective_mass_kg };
+                let mass = if rotation {
+                    gains.effective_inertia_kgm2
+                } else {
+                    gains.effective_mass_kg
+                };
                 let d = 2.0 * gains.damping_ratio * (cmd.stiffness[axis].max(0.0) * mass).sqrt();
                 if rotation {
                     d.min(gains.max_rotational_damping)
@@ -304,7 +317,11 @@ impl HybridController {
             if joint.velocity.is_finite() && excess > 0.0 {
                 tau -= self.gains.velocity_brake_gain * excess * obs.qd[i].signum();
             }
-            self.torques[i] = if tau.is_finite() { tau.clamp(-joint.effort, joint.effort) } else { 0.0 };
+            self.torques[i] = if tau.is_finite() {
+                tau.clamp(-joint.effort, joint.effort)
+            } else {
+                0.0
+            };
         }
         self.torques.as_slice()
     }
@@ -325,12 +342,19 @@ mod tests {
     use nalgebra::Translation3;
 
     fn state_at(tool: Isometry3<f64>, applied: Vector6<f64>) -> ControlState {
-        ControlState { tool, twist: Vector6::zeros(), applied }
+        ControlState {
+            tool,
+            twist: Vector6::zeros(),
+            applied,
+        }
     }
 
     fn command(frame: Isometry3<f64>, position: [bool; 6]) -> Command {
         Command {
-            pose: Isometry3::from_parts(Translation3::new(0.5, 0.1, 0.3), UnitQuaternion::from_euler_angles(3.0, 0.1, 0.2)),
+            pose: Isometry3::from_parts(
+                Translation3::new(0.5, 0.1, 0.3),
+                UnitQuaternion::from_euler_angles(3.0, 0.1, 0.2),
+            ),
             twist: Vector6::zeros(),
             wrench: Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
             frame,
@@ -345,24 +369,46 @@ mod tests {
     #[test]
     fn all_position_is_plain_impedance_control() {
         let gains = ControllerGains::default();
-        let tool = Isometry3::from_parts(Translation3::new(0.49, 0.12, 0.31), UnitQuaternion::from_euler_angles(3.0, 0.12, 0.2));
+        let tool = Isometry3::from_parts(
+            Translation3::new(0.49, 0.12, 0.31),
+            UnitQuaternion::from_euler_angles(3.0, 0.12, 0.2),
+        );
         // The compliant frame at the control point, unrotated: Ω is K and Ω̃ vanishes.
         let frame = Isometry3::from_parts(tool.translation, UnitQuaternion::identity());
-        let cmd = Command { stiffness: [1000.0, 1000.0, 1000.0, 100.0, 100.0, 100.0], ..command(frame, [true; 6]) };
+        let cmd = Command {
+            stiffness: [1000.0, 1000.0, 1000.0, 100.0, 100.0, 100.0],
+            ..command(frame, [true; 6])
+        };
         let mut integral = Vector6::zeros();
-        let wrench = HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::new(5.0, 0.0, 3.0, 0.0, 0.0, 0.0)), &cmd, &mut integral, 0.001);
+        let wrench = HybridController::cartesian_wrench(
+            &gains,
+            &state_at(tool, Vector6::new(5.0, 0.0, 3.0, 0.0, 0.0, 0.0)),
+            &cmd,
+            &mut integral,
+            0.001,
+        );
         let expected_force = (cmd.pose.translation.vector - tool.translation.vector) * 1000.0;
         let expected_moment = rotation_error(&cmd.pose.rotation, &tool.rotation) * 100.0;
         assert!((wrench.fixed_rows::<3>(0) - expected_force).norm() < 1e-9, "{wrench}");
         assert!((wrench.fixed_rows::<3>(3) - expected_moment).norm() < 1e-9, "{wrench}");
-        assert_eq!(integral, Vector6::zeros(), "measured forces are ignored on position axes");
+        assert_eq!(
+            integral,
+            Vector6::zeros(),
+            "measured forces are ignored on position axes"
+        );
     }
 
     #[test]
     fn force_axis_pushes_along_the_frame_z_with_the_sign_of_the_applied_force() {
         // A surface frame with z pointing down (into a table below the tool).
-        let frame = Isometry3::from_parts(Translation3::new(0.5, 0.1, 0.3), UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0));
-        let tool = Isometry3::from_parts(Translation3::new(0.5, 0.1, 0.3), UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0));
+        let frame = Isometry3::from_parts(
+            Translation3::new(0.5, 0.1, 0.3),
+            UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0),
+        );
+        let tool = Isometry3::from_parts(
+            Translation3::new(0.5, 0.1, 0.3),
+            UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0),
+        );
         let mut cmd = command(frame, [true, true, false, true, true, true]);
         cmd.pose = tool;
         // Desired: press down with 10 N (applied force along frame z = −base z).
@@ -370,12 +416,17 @@ mod tests {
         let gains = ControllerGains::default();
         let mut integral = Vector6::zeros();
         // Not in contact yet: the measured applied force is zero.
-        let wrench = HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::zeros()), &cmd, &mut integral, 0.001);
-        assert!(wrench[2] < -10.0, "commands more than the feed-forward downwards: {wrench}");
+        let wrench =
+            HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::zeros()), &cmd, &mut integral, 0.001);
+        assert!(
+            wrench[2] < -10.0,
+            "commands more than the feed-forward downwards: {wrench}"
+        );
         assert!(wrench.fixed_rows::<2>(0).norm() < 1e-9);
         // In contact with exactly the desired force: feed-forward only, no error.
         let mut integral = Vector6::zeros();
-        let wrench = HybridController::cartesian_wrench(&gains, &state_at(tool, cmd.wrench), &cmd, &mut integral, 0.001);
+        let wrench =
+            HybridController::cartesian_wrench(&gains, &state_at(tool, cmd.wrench), &cmd, &mut integral, 0.001);
         assert!((wrench[2] + 10.0).abs() < 1e-9, "{wrench}");
         assert!(integral.norm() < 1e-12);
     }
@@ -391,22 +442,39 @@ mod tests {
         for _ in 0..1_000 {
             HybridController::cartesian_wrench(&gains, &state_at(tool, Vector6::zeros()), &cmd, &mut integral, 0.001);
         }
-        assert!((integral[2] * cmd.ki - 10.0).abs() < 1e-9, "k_i ∫ is clamped at the limit: {}", integral[2] * cmd.ki);
+        assert!(
+            (integral[2] * cmd.ki - 10.0).abs() < 1e-9,
+            "k_i ∫ is clamped at the limit: {}",
+            integral[2] * cmd.ki
+        );
     }
 
     #[test]
     fn the_law_is_invariant_under_a_rigid_motion_of_the_whole_scene() {
         let gains = ControllerGains::default();
-        let frame = Isometry3::from_parts(Translation3::new(0.52, 0.08, 0.25), UnitQuaternion::from_euler_angles(2.9, 0.2, -0.4));
-        let tool = Isometry3::from_parts(Translation3::new(0.49, 0.12, 0.31), UnitQuaternion::from_euler_angles(3.0, 0.12, 0.2));
+        let frame = Isometry3::from_parts(
+            Translation3::new(0.52, 0.08, 0.25),
+            UnitQuaternion::from_euler_angles(2.9, 0.2, -0.4),
+        );
+        let tool = Isometry3::from_parts(
+            Translation3::new(0.49, 0.12, 0.31),
+            UnitQuaternion::from_euler_angles(3.0, 0.12, 0.2),
+        );
         let mut cmd = command(frame, [true, false, false, true, true, false]);
         cmd.twist = Vector6::new(0.01, -0.02, 0.03, 0.1, 0.0, -0.1);
         cmd.wrench = Vector6::new(1.0, 2.0, -8.0, 0.1, 0.0, 0.3);
-        let state = ControlState { tool, twist: Vector6::new(0.02, 0.01, -0.01, 0.05, -0.1, 0.2), applied: Vector6::new(0.5, 1.0, -6.0, 0.0, 0.05, 0.1) };
+        let state = ControlState {
+            tool,
+            twist: Vector6::new(0.02, 0.01, -0.01, 0.05, -0.1, 0.2),
+            applied: Vector6::new(0.5, 1.0, -6.0, 0.0, 0.05, 0.1),
+        };
         let mut integral = Vector6::zeros();
         let wrench = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 0.001);
 
-        let motion = Isometry3::from_parts(Translation3::new(-1.0, 2.0, 0.5), UnitQuaternion::from_euler_angles(0.7, -0.3, 1.9));
+        let motion = Isometry3::from_parts(
+            Translation3::new(-1.0, 2.0, 0.5),
+            UnitQuaternion::from_euler_angles(0.7, -0.3, 1.9),
+        );
         let rot = motion.rotation;
         let spin = |v: &Vector6<f64>| {
             let mut out = Vector6::zeros();
@@ -414,24 +482,44 @@ mod tests {
             out.fixed_rows_mut::<3>(3).copy_from(&(rot * v.fixed_rows::<3>(3)));
             out
         };
-        let moved_cmd = Command { pose: motion * cmd.pose, frame: motion * cmd.frame, twist: spin(&cmd.twist), wrench: spin(&cmd.wrench), ..cmd.clone() };
-        let moved_state = ControlState { tool: motion * state.tool, twist: spin(&state.twist), applied: spin(&state.applied) };
+        let moved_cmd = Command {
+            pose: motion * cmd.pose,
+            frame: motion * cmd.frame,
+            twist: spin(&cmd.twist),
+            wrench: spin(&cmd.wrench),
+            ..cmd.clone()
+        };
+        let moved_state = ControlState {
+            tool: motion * state.tool,
+            twist: spin(&state.twist),
+            applied: spin(&state.applied),
+        };
         let mut moved_integral = Vector6::zeros();
         let moved = HybridController::cartesian_wrench(&gains, &moved_state, &moved_cmd, &mut moved_integral, 0.001);
         assert!((moved - spin(&wrench)).norm() < 1e-9, "{moved} vs {}", spin(&wrench));
-        assert!((moved_integral - integral).norm() < 1e-12, "the integral lives in the compliant frame");
+        assert!(
+            (moved_integral - integral).norm() < 1e-12,
+            "the integral lives in the compliant frame"
+        );
     }
 
     #[test]
     fn damping_opposes_velocity_on_every_axis() {
         let gains = ControllerGains::default();
         let tool = Isometry3::identity();
-        let cmd = Command { pose: tool, ..command(Isometry3::identity(), [true, true, false, true, false, true]) };
+        let cmd = Command {
+            pose: tool,
+            ..command(Isometry3::identity(), [true, true, false, true, false, true])
+        };
         for axis in 0..6 {
             let mut twist = Vector6::zeros();
             twist[axis] = 0.1;
             let mut integral = Vector6::zeros();
-            let state = ControlState { tool, twist, applied: Vector6::zeros() };
+            let state = ControlState {
+                tool,
+                twist,
+                applied: Vector6::zeros(),
+            };
             let wrench = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 0.001);
             assert!(wrench[axis] < 0.0, "axis {axis}: {wrench}");
         }

@@ -353,7 +353,9 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
     let t0 = demo.t_s.first().copied().unwrap_or(0.0);
     let root = SVGBackend::new(path, (1300, 520)).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut lines: Vec<(String, RGBColor, Vec<(f64, f64)>, bool)> = Vec::new();
+    // Label, colour, points, drawn thick.
+    type Line = (String, RGBColor, Vec<(f64, f64)>, bool);
+    let mut lines: Vec<Line> = Vec::new();
     for (index, decl) in ir.learn.frames.iter().enumerate() {
         let Some(frame) = learned.frames.get(&decl.name) else {
             continue;

@@ -21,7 +21,7 @@ pub struct ControllerGains {
     /// last tick's velocity is explicit: at 1 kHz, 0.8 N m s/rad made the wrist oscillate in
     /// simulation and 0.6 held; the default keeps a margin.
     pub max_rotational_damping: f64,
-    /// Damping of force-controlled translations [N s/m]: bounds the speed of free motion under
+    /// Damping of force-controlled translations \[N s/m\]: bounds the speed of free motion under
     /// a force command to `f / d`.
     pub force_axis_damping: f64,
     /// Damping of force-controlled rotations \[N m s/rad\].

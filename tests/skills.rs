@@ -152,6 +152,25 @@ fn press_tracks_the_learned_profile_with_the_button_nearer_and_farther() {
 }
 
 #[test]
+fn contour_tracks_the_learned_magnitude_on_a_moved_drum() {
+    let (skill, learned) = learned("contour");
+    for (name, set) in [("2 cm farther", "drum.z=0.13"), ("2 cm sideways", "drum.x=0.5666")] {
+        let (report, log, metrics) = run(&skill, &learned, "cylinder.toml", &[set], false);
+        assert_eq!(report.outcome, skill_ir::Outcome::Success, "{name}: {}", report.message);
+        let rms = metrics.force_rms_rel.expect("a contact phase");
+        let share = metrics.contact_share.expect("a contact phase");
+        eprintln!(
+            "contour {name}: force RMS {:.1} %, contact {:.1} %",
+            rms * 100.0,
+            share * 100.0
+        );
+        assert!(rms <= 0.15, "{name}: force RMS {rms}");
+        assert!(share >= 0.95, "{name}: contact share {share}");
+        assert_sane(&log);
+    }
+}
+
+#[test]
 fn two_runs_are_bit_identical() {
     let (skill, learned) = learned("slide");
     let (_, first, _) = run(&skill, &learned, "table.toml", &["table.z=0.225"], false);

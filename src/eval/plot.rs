@@ -513,7 +513,7 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
 
 fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
     let rows = runs.len().max(1);
-    let root = SVGBackend::new(path, (1300, 60 + 34 * rows as u32)).into_drawing_area();
+    let root = SVGBackend::new(path, (1300, 60 + 56 * rows as u32)).into_drawing_area();
     root.fill(&WHITE)?;
     let duration = runs
         .iter()
@@ -522,17 +522,12 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
     let mut chart = ChartBuilder::on(&root)
         .margin(10)
         .x_label_area_size(30)
-        .y_label_area_size(330)
-        .build_cartesian_2d(0.0..duration, 0.0..rows as f64)?;
+        .y_label_area_size(10)
+        .build_cartesian_2d(0.0..duration, -0.5..rows as f64 - 0.5)?;
     chart
         .configure_mesh()
         .disable_y_mesh()
-        .y_labels(rows)
-        .y_label_formatter(&|y| {
-            let index = (*y - 0.5).round() as usize;
-            runs.get(index)
-                .map_or(String::new(), |o| format!("{} ({})", o.result.variant, o.result.mode))
-        })
+        .y_labels(0)
         .x_desc("time [s]")
         .draw()?;
     let mut names: Vec<String> = Vec::new();
@@ -556,18 +551,27 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
             let colour = Palette99::pick(index);
             let (t0, t1) = (log.ticks[start].t_s, log.ticks[end - 1].t_s);
             chart.draw_series(std::iter::once(Rectangle::new(
-                [(t0, row as f64 + 0.15), (t1, row as f64 + 0.85)],
+                [(t0, row as f64 - 0.42), (t1, row as f64 + 0.02)],
                 colour.filled(),
             )))?;
             if t1 - t0 > duration * 0.06 {
                 chart.draw_series(std::iter::once(Text::new(
                     name,
-                    (t0 + 0.05, row as f64 + 0.62),
+                    (t0 + 0.05, row as f64 - 0.12),
                     ("sans-serif", 11),
                 )))?;
             }
             start = end;
         }
+    }
+    // Trial names above their bars (text hangs down from its anchor).
+    for (row, outcome) in runs.iter().enumerate() {
+        let label = format!("{} ({})", outcome.result.variant, outcome.result.mode);
+        chart.draw_series(std::iter::once(Text::new(
+            label,
+            (0.02, row as f64 + 0.44),
+            ("sans-serif", 12),
+        )))?;
     }
     root.present()?;
     Ok(())

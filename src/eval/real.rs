@@ -39,6 +39,31 @@ pub struct RealResult {
     pub force_rms_rel: Option<f64>,
     /// Its share of the contact phase in contact.
     pub contact_share: Option<f64>,
+    /// Whether the file's forces were negated to skillc's convention.
+    pub sign_flipped: bool,
+}
+
+/// Whether a demonstration stores the force the robot applies rather than the force on the
+/// tool (the LASA files do not document theirs): in contact, the force on the tool points away
+/// from the surface, back towards where the tool came from. The contact is taken where the
+/// force is largest, the way back as the direction to the first sample.
+fn stores_applied_force(demo: &skill_runtime::demo::Demo) -> bool {
+    let Some((peak, _)) = demo
+        .force_n
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
+    else {
+        return false;
+    };
+    let back = demo.position_m[0] - demo.position_m[peak];
+    let strong: Vec<&Vector3<f64>> = demo
+        .force_n
+        .iter()
+        .filter(|f| f.norm() > 0.5 * demo.force_n[peak].norm())
+        .collect();
+    let mean: Vector3<f64> = strong.iter().copied().sum::<Vector3<f64>>() / strong.len().max(1) as f64;
+    back.norm() > 0.01 && mean.dot(&back) < 0.0
 }
 
 /// A demonstration whose force does not change between most consecutive samples: the sensor
@@ -103,6 +128,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         reproduction: None,
         force_rms_rel: None,
         contact_share: None,
+        sign_flipped: false,
     };
     let loaded = match read_csv(path, &ReadOptions { min_samples: 30 }) {
         Ok(loaded) => loaded,
@@ -117,7 +143,17 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         result.skipped = Some("the force signal is frozen (the sensor did not stream): skipped".to_string());
         return result;
     }
-    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    let mut demo = demo;
+    if stores_applied_force(&demo) {
+        // skillc's convention is the force the environment exerts on the tool (SPEC §3).
+        for (f, m) in demo.force_n.iter_mut().zip(demo.torque_nm.iter_mut()) {
+            *f = -*f;
+            *m = -*m;
+        }
+        warnings.push("the force points into the surface: the file stores the force the robot applies; negated".into());
+        result.sign_flipped = true;
+    }
     let learned = match learn_skill(skill, &demo, &warnings, &LearnOptions::default()) {
         Ok(learned) => learned,
         Err(err) => {
@@ -191,4 +227,30 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         Err(err) => result.reproduction = Some(error_chain(&err)),
     }
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_force_convention_of_a_file_is_recognised() {
+        use skill_runtime::demogen::{generate, to_csv, StdSkill};
+        for skill in [StdSkill::Touch, StdSkill::Slide] {
+            let text = to_csv(&generate(skill, skill.default_seed()));
+            let demo = skill_runtime::demo::parse_csv("demo.csv", &text, &ReadOptions::default())
+                .expect("parses")
+                .demo;
+            assert!(
+                !stores_applied_force(&demo),
+                "{skill:?}: the generator stores the force on the tool"
+            );
+            let mut flipped = demo.clone();
+            flipped.force_n.iter_mut().for_each(|f| *f = -*f);
+            assert!(
+                stores_applied_force(&flipped),
+                "{skill:?}: negated forces are recognised"
+            );
+        }
+    }
 }

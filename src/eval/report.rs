@@ -189,8 +189,9 @@ pub(super) fn real_table(results: &[RealResult]) -> String {
         let labels: Vec<String> = r.label_boundaries_s.iter().map(|e| format!("{e:.2}")).collect();
         let _ = writeln!(
             out,
-            "  {:<14} boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; reproduction: {} (force RMS {}%, contact {}%)",
+            "  {:<14} {}boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; reproduction: {} (force RMS {}%, contact {}%)",
             r.file,
+            if r.sign_flipped { "(force negated) " } else { "" },
             found.join(", "),
             labels.join(", "),
             errors.join(", "),

@@ -28,6 +28,10 @@ pub struct LearnArgs {
     /// Resampling rate \[Hz\], overriding the template's `resample`.
     #[arg(long, value_name = "HZ")]
     pub resample: Option<f64>,
+    /// The file's forces are the force the robot applies (not, as skillc expects, the force the
+    /// environment exerts on the tool): negate them before learning.
+    #[arg(long)]
+    pub applied_force: bool,
     /// Also draw what was learned into this folder (SVG): the demonstration against the
     /// rollout with segments and frames, forces in the world and compliant frames.
     #[arg(long, value_name = "DIR")]
@@ -101,9 +105,29 @@ pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program,
 
 /// Learns a skill from a demonstration file; the library form of `skillc learn`.
 pub fn learn_from_files(skill: &skill_ir::Skill, demo_path: &Path, options: &LearnOptions) -> Result<Learned, Failure> {
+    learn_from_file(skill, demo_path, options, false)
+}
+
+/// Like [`learn_from_files`], optionally negating the file's wrench first (`applied_force`).
+/// Warns when the forces look like the force the robot applies and were not negated.
+pub fn learn_from_file(
+    skill: &skill_ir::Skill,
+    demo_path: &Path,
+    options: &LearnOptions,
+    applied_force: bool,
+) -> Result<Learned, Failure> {
     let min_samples = (skill.learn.segments as usize * 5).max(10);
-    let loaded = read_csv(demo_path, &ReadOptions { min_samples }).map_err(|err| Failure::Input(error_chain(&err)))?;
-    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    let mut loaded =
+        read_csv(demo_path, &ReadOptions { min_samples }).map_err(|err| Failure::Input(error_chain(&err)))?;
+    let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    if applied_force {
+        crate::eval::real::negate_wrench(&mut loaded.demo);
+    } else if crate::eval::real::stores_applied_force(&loaded.demo) {
+        warnings.push(
+            "in contact the force points into the surface: if the file stores the force the robot applies, pass --applied-force"
+                .to_string(),
+        );
+    }
     learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| Failure::Input(error_chain(&err)))
 }
 
@@ -135,7 +159,7 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
         lowpass_hz: args.lowpass,
         resample_hz: args.resample,
     };
-    let learned = learn_from_files(&skill, &args.demo, &options)?;
+    let learned = learn_from_file(&skill, &args.demo, &options, args.applied_force)?;
     let json = serde_json::to_string_pretty(&learned).map_err(|err| Failure::Usage(err.to_string()))? + "\n";
     atomic::write(&args.output, json.as_bytes())
         .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", args.output.display())))?;

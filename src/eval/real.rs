@@ -43,11 +43,19 @@ pub struct RealResult {
     pub sign_flipped: bool,
 }
 
+/// Negates the demonstration's forces and torques (to or from the force the robot applies).
+pub fn negate_wrench(demo: &mut skill_runtime::demo::Demo) {
+    for (f, m) in demo.force_n.iter_mut().zip(demo.torque_nm.iter_mut()) {
+        *f = -*f;
+        *m = -*m;
+    }
+}
+
 /// Whether a demonstration stores the force the robot applies rather than the force on the
 /// tool (the LASA files do not document theirs): in contact, the force on the tool points away
 /// from the surface, back towards where the tool came from. The contact is taken where the
 /// force is largest, the way back as the direction to the first sample.
-fn stores_applied_force(demo: &skill_runtime::demo::Demo) -> bool {
+pub fn stores_applied_force(demo: &skill_runtime::demo::Demo) -> bool {
     let Some((peak, _)) = demo
         .force_n
         .iter()
@@ -147,10 +155,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     let mut demo = demo;
     if stores_applied_force(&demo) {
         // skillc's convention is the force the environment exerts on the tool (SPEC §3).
-        for (f, m) in demo.force_n.iter_mut().zip(demo.torque_nm.iter_mut()) {
-            *f = -*f;
-            *m = -*m;
-        }
+        negate_wrench(&mut demo);
         warnings.push("the force points into the surface: the file stores the force the robot applies; negated".into());
         result.sign_flipped = true;
     }

@@ -389,3 +389,82 @@ fn the_shipped_demonstrations_are_what_the_generator_makes() {
     let out = skillc(&["demos", "--check", "--out", "examples/demos"]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
 }
+
+#[test]
+fn eval_real_learns_from_a_folder_of_demonstrations_and_scores_the_segmentation() {
+    // A folder shaped like the LASA data: one demonstration that stores the force the robot
+    // applies, one whose force never changes, and a labels file.
+    let dir = temp_dir("real");
+    let data = dir.join("csv");
+    std::fs::create_dir_all(&data).expect("dir");
+    let demo =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/demos/slide.csv"))
+            .expect("shipped slide demo");
+    let mut applied = String::new();
+    let mut frozen = String::new();
+    for (index, line) in demo.lines().enumerate() {
+        if index == 0 {
+            applied.push_str(line);
+            frozen.push_str(line);
+        } else {
+            let mut fields: Vec<String> = line.split(',').map(str::to_string).collect();
+            for field in &mut fields[8..14] {
+                let value: f64 = field.parse().expect("number");
+                *field = format!("{}", -value);
+            }
+            applied.push_str(&fields.join(","));
+            for field in &mut fields[8..14] {
+                *field = "1.5".to_string();
+            }
+            frozen.push_str(&fields.join(","));
+        }
+        applied.push('\n');
+        frozen.push('\n');
+    }
+    std::fs::write(data.join("wipe_01.csv"), applied).expect("write");
+    std::fs::write(data.join("wipe_02.csv"), frozen).expect("write");
+    // Ground truth of the shipped slide: contact at 2.005 s, lift-off at 6.832 s (1 kHz).
+    std::fs::write(
+        data.join("segment_labels.csv"),
+        "file,first_sample,last_sample,label\nwipe_01.csv,1,2005,1\nwipe_01.csv,2006,6832,2\nwipe_01.csv,6833,8850,3\n",
+    )
+    .expect("write");
+    let out_dir = dir.join("report");
+    let out = skillc(&[
+        "eval",
+        "--skill",
+        "touch",
+        "--no-replay",
+        "--real",
+        data.to_str().expect("utf8"),
+        "--out",
+        out_dir.to_str().expect("utf8"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).expect("summary")).expect("JSON");
+    let real = summary["real"].as_array().expect("real results");
+    assert_eq!(real.len(), 2);
+    let frozen = real.iter().find(|r| r["file"] == "wipe_02.csv").expect("frozen row");
+    assert!(frozen["skipped"].as_str().expect("skipped").contains("frozen"));
+    let wipe = real.iter().find(|r| r["file"] == "wipe_01.csv").expect("wipe row");
+    assert_eq!(wipe["sign_flipped"], true);
+    let errors: Vec<f64> = wipe["boundary_errors_s"]
+        .as_array()
+        .expect("errors")
+        .iter()
+        .filter_map(|e| e.as_f64())
+        .collect();
+    assert_eq!(errors.len(), 2);
+    assert!(errors.iter().all(|e| *e < 0.2), "boundary errors {errors:?}");
+    let force = wipe["force_n"].as_f64().expect("force");
+    assert!((force - 10.0).abs() < 0.5, "learned {force} N");
+    assert!(
+        wipe["reproduction"]
+            .as_str()
+            .expect("reproduction")
+            .starts_with("Success"),
+        "{wipe}"
+    );
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

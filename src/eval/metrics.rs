@@ -99,22 +99,45 @@ impl ContactPlan {
     }
 }
 
-/// The desired force of a learned force `t` seconds into its phase \[N\] (magnitude along z;
-/// for a force vector, its magnitude).
-pub fn desired_at(force: &LearnedForce, t: f64) -> f64 {
-    match force {
-        LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } => {
-            let mut rollout = dmp.rollout();
-            let dt = 0.002;
-            let mut elapsed = 0.0;
-            while elapsed + 1e-12 < t.min(dmp.tau_s * 1.5) {
-                rollout.step(dmp, dt);
-                elapsed += dt;
+/// A learned force's desired value \[N\] every `period_s`, from the start of its phase until it
+/// settles (magnitude along z; for a force vector, its magnitude), from one rollout. Past the end
+/// the last value holds: see [`DesiredProfile::at`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesiredProfile {
+    period_s: f64,
+    values: Vec<f64>,
+}
+
+impl DesiredProfile {
+    /// Samples `force`.
+    pub fn new(force: &LearnedForce, period_s: f64) -> Self {
+        let values = match force {
+            LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } => {
+                let mut rollout = dmp.rollout();
+                let steps = (dmp.tau_s * 1.5 / period_s).ceil() as usize;
+                let mut values = Vec::with_capacity(steps + 1);
+                for step in 0..=steps {
+                    if step > 0 {
+                        rollout.step(dmp, period_s);
+                    }
+                    values.push(rollout.position().iter().map(|v| v * v).sum::<f64>().sqrt());
+                }
+                values
             }
-            let x = rollout.position();
-            x.iter().map(|v| v * v).sum::<f64>().sqrt()
-        }
-        other => other.value_n().unwrap_or(0.0),
+            other => vec![other.value_n().unwrap_or(0.0)],
+        };
+        DesiredProfile { period_s, values }
+    }
+
+    /// The desired force `t` seconds into the phase.
+    pub fn at(&self, t: f64) -> f64 {
+        let index = ((t / self.period_s).max(0.0) as usize).min(self.values.len() - 1);
+        self.values[index]
+    }
+
+    /// The largest desired force.
+    pub fn peak(&self) -> f64 {
+        self.values.iter().copied().fold(0.0, f64::max)
     }
 }
 
@@ -150,7 +173,7 @@ pub fn measure(
     let mut desired_peak: f64 = 0.0;
     let mut in_contact = 0usize;
     let mut visit_start: Option<(u32, f64)> = None;
-    let mut replay_profile: Vec<f64> = Vec::new();
+    let replay_profile = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01));
     let mut last_contact_z: Vec<f64> = Vec::new();
     for tick in &log.ticks {
         if Some(tick.state) != prepose {
@@ -172,18 +195,7 @@ pub fn measure(
         let t_in = tick.t_s - start;
         let (desired, measured) = if replay {
             let z = replay_frame_z(t_in);
-            let desired = match &plan.force {
-                Some(force) => {
-                    // Sample the profile every 10 ms (rolling a DMP per tick would be quadratic).
-                    let index = (t_in / 0.01) as usize;
-                    while replay_profile.len() <= index {
-                        let t = replay_profile.len() as f64 * 0.01;
-                        replay_profile.push(desired_at(force, t));
-                    }
-                    replay_profile[index]
-                }
-                None => 0.0,
-            };
+            let desired = replay_profile.as_ref().map_or(0.0, |profile| profile.at(t_in));
             (desired, applied_along(tick, &z))
         } else {
             (tick.desired_cf[2], tick.wrench_cf[2])

@@ -258,13 +258,10 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
     };
     let frame_z = |t: f64| replay_frame_z(skill, learned, plan, t);
     let metrics: Metrics = metrics::measure(&log, plan, job.replay, &frame_z);
-    let learned_force = plan.force.as_ref().map(|force| match force {
-        skill_runtime::skill::LearnedForce::Dmp { .. } | skill_runtime::skill::LearnedForce::Magnitude { .. } => (0
-            ..100)
-            .map(|k| metrics::desired_at(force, k as f64 * 0.05))
-            .fold(0.0, f64::max),
-        other => other.value_n().unwrap_or(0.0),
-    });
+    let learned_force = plan
+        .force
+        .as_ref()
+        .map(|force| metrics::DesiredProfile::new(force, 0.01).peak());
     let criteria = prepared.spec.criteria;
     let mut success = job.replay || report.outcome == skill_ir::Outcome::Success;
     if let Some(max) = criteria.force_rms_rel {

@@ -394,10 +394,11 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
             continue;
         };
         let duration = segment.end_s - segment.start_s;
+        let profile = super::metrics::DesiredProfile::new(force, duration / 200.0);
         let points = (0..=200)
             .map(|k| {
                 let t = duration * k as f64 / 200.0;
-                (segment.start_s - t0 + t, super::metrics::desired_at(force, t))
+                (segment.start_s - t0 + t, profile.at(t))
             })
             .collect();
         lines.push((format!("learned `{}`", decl.name), BLACK, points, true));

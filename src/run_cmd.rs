@@ -36,6 +36,10 @@ pub struct RunArgs {
     /// Write every control tick to this CSV file.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Also draw the run into this folder (SVG): tool path against the demonstration, force
+    /// along the compliant z, world-frame forces, state timeline. Needs `--demo`.
+    #[arg(long, value_name = "DIR", requires = "demo")]
+    pub plot: Option<PathBuf>,
     /// Run the baseline instead: the learned motions replayed under pure impedance control.
     #[arg(long)]
     pub replay: bool,
@@ -145,7 +149,59 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     if let Some(path) = &args.output {
         let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), log.ticks.len());
     }
+    if let (Some(dir), Some(demo)) = (&args.plot, &args.demo) {
+        plot_run(dir, demo, &skill, &learned, args.replay, &report, log, &mut text)?;
+    }
     Ok((report, text))
+}
+
+/// Draws the eval's plots for one run.
+#[allow(clippy::too_many_arguments)] // One call site; the pieces of a finished run.
+fn plot_run(
+    dir: &Path,
+    demo: &Path,
+    skill: &skill_ir::Skill,
+    learned: &Learned,
+    replay: bool,
+    report: &RunReport,
+    log: RunLog,
+    text: &mut String,
+) -> Result<(), Failure> {
+    std::fs::create_dir_all(dir).map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
+    let view = crate::eval::SkillView {
+        name: &skill.name,
+        learned: Some(learned),
+        skill: Some(skill),
+        error: None,
+        demo: demo.to_path_buf(),
+        criteria: crate::eval::Criteria::default(),
+    };
+    let outcome = crate::eval::Outcome {
+        result: crate::eval::TrialResult {
+            skill: skill.name.clone(),
+            variant: "this run".to_string(),
+            mode: if replay { "replay" } else { "skill" }.to_string(),
+            success: report.outcome == skill_ir::Outcome::Success,
+            force_rms_rel: None,
+            contact_share: None,
+            peak_force_n: 0.0,
+            stop_force_n: None,
+            learned_force_n: None,
+            goal_error_m: 0.0,
+            duration_s: report.duration_s,
+            message: report.message.clone(),
+            error: false,
+            states: Vec::new(),
+        },
+        log,
+    };
+    for kind in ["trajectory", "force", "world_force", "timeline"] {
+        let path = dir.join(format!("{}_{kind}.svg", skill.name));
+        crate::eval::plot::draw(kind, &path, &view, &[&outcome])
+            .map_err(|err| Failure::Usage(format!("cannot plot `{kind}`: {err}")))?;
+        let _ = writeln!(text, "wrote `{}`", path.display());
+    }
+    Ok(())
 }
 
 /// Per-state contact statistics of a run: applied force along the compliant frame's z.

@@ -326,9 +326,9 @@ struct Machine<'b, 'a> {
 
 /// What guards see this tick.
 struct Sensed {
-    tool: Isometry3<f64>,
+    /// The applied wrench at the tool point, base frame.
     applied: Vector6<f64>,
-    /// Desired and measured force-controlled components in the compliant frame, if any.
+    /// The largest force error over the force-controlled axes (compliant frame), if any.
     force_error_max: Option<f64>,
 }
 
@@ -681,13 +681,11 @@ pub fn run_skill(
         }
         let active = machine.active().expect("terminal states returned above");
         let sensed = Sensed {
-            tool: rig.tool(),
             applied: rig.controller.state().applied,
             force_error_max: last_cmd
                 .as_ref()
                 .and_then(|cmd| force_error(cmd, &rig.controller.state().applied)),
         };
-        let _ = sensed.tool;
 
         // At most one transition per tick, in priority order.
         let mut next: Option<(ir::StateId, usize)> = None;

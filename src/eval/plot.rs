@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use nalgebra::{Isometry3, Vector3};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use skill_runtime::demo::{read_csv, ReadOptions};
 use skill_runtime::exec::RunLog;
@@ -62,6 +63,27 @@ pub fn draw(kind: &str, path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -
 
 type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
+/// Every chart here: time or metres against newtons or metres, drawn as SVG.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The legend box, alike on every chart.
+fn draw_legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> DrawResult {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()?;
+    Ok(())
+}
+
+/// The demonstration a plot draws, read as `skillc learn` reads it.
+fn read_demo(path: &Path) -> Result<skill_runtime::demo::Demo, String> {
+    read_csv(path, &ReadOptions::default())
+        .map(|loaded| loaded.demo)
+        .map_err(|e| e.to_string())
+}
+
 /// Ticks after pre-positioning, every `stride`.
 fn ticks(log: &RunLog, stride: usize) -> impl Iterator<Item = &skill_runtime::exec::Tick> {
     let prepose = log.states.iter().position(|s| s == "prepose").map(|i| i as u32);
@@ -96,9 +118,7 @@ fn bounds(points: impl Iterator<Item = (f64, f64)>) -> ((f64, f64), (f64, f64)) 
 
 fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
     let offset = flange_to_tool();
-    let demo = read_csv(&skill.demo, &ReadOptions::default())
-        .map_err(|e| e.to_string())?
-        .demo;
+    let demo = read_demo(&skill.demo)?;
     let tool_of = |p: &Vector3<f64>, q: &nalgebra::UnitQuaternion<f64>| p + q * offset.translation.vector;
     let demo_tool: Vec<Vector3<f64>> = demo
         .position_m
@@ -236,12 +256,7 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
                 BLACK.filled(),
             )))?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 11))
-            .draw()?;
+        draw_legend(&mut chart)?;
     }
     root.present()?;
     Ok(())
@@ -331,12 +346,7 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
             )?;
         }
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 11))
-        .draw()?;
+    draw_legend(&mut chart)?;
     root.present()?;
     Ok(())
 }
@@ -344,9 +354,7 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
 /// The demonstration's applied force along each learned frame's z, with the learned desired
 /// forces over their segments (thesis Fig. 4.7, 5.9c).
 fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
-    let demo = read_csv(&skill.demo, &ReadOptions::default())
-        .map_err(|e| e.to_string())?
-        .demo;
+    let demo = read_demo(&skill.demo)?;
     let (Some(learned), Some(ir)) = (skill.learned, skill.skill) else {
         return Err("nothing learned to plot".into());
     };
@@ -434,20 +442,13 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 11))
-        .draw()?;
+    draw_legend(&mut chart)?;
     root.present()?;
     Ok(())
 }
 
 fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
-    let demo = read_csv(&skill.demo, &ReadOptions::default())
-        .map_err(|e| e.to_string())?
-        .demo;
+    let demo = read_demo(&skill.demo)?;
     let t_demo0 = demo.t_s.first().copied().unwrap_or(0.0);
     let demo_series: Vec<Vec<(f64, f64)>> = (0..3)
         .map(|axis| {
@@ -501,12 +502,7 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
                 .label(["fx", "fy", "fz"][axis])
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 11))
-            .draw()?;
+        draw_legend(&mut chart)?;
     }
     root.present()?;
     Ok(())

@@ -261,6 +261,24 @@ fn free(from: Vector3<f64>, to: Vector3<f64>, warp_amount: f64) -> Box<dyn Fn(f6
     })
 }
 
+/// Holding still at `at` for 0.4 s, as a person does before and after a demonstration.
+fn rest(at: Vector3<f64>) -> Phase {
+    Phase {
+        label: "rest",
+        duration_s: 0.4,
+        state: free(at, at, 0.0),
+    }
+}
+
+/// A free-space phase from `from` to `to` with a warped minimum-jerk profile.
+fn moving(label: &'static str, duration_s: f64, from: Vector3<f64>, to: Vector3<f64>, warp_amount: f64) -> Phase {
+    Phase {
+        label,
+        duration_s,
+        state: free(from, to, warp_amount),
+    }
+}
+
 /// Generates the demonstration of `skill` with `seed`.
 pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
     let mut rng = SplitMix64::new(seed);
@@ -287,16 +305,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let settle = 0.25;
             let slide_s = rng.range(4.0, 4.4);
             let contact_s = settle + slide_s + settle;
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(hover, hover, 0.0),
-            });
-            phases.push(Phase {
-                label: "approach",
-                duration_s: rng.range(1.5, 1.8),
-                state: free(hover, c1, w1),
-            });
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(1.5, 1.8), hover, c1, w1));
             phases.push(Phase {
                 label: "slide",
                 duration_s: contact_s,
@@ -315,16 +325,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     }
                 }),
             });
-            phases.push(Phase {
-                label: "leave",
-                duration_s: rng.range(1.4, 1.7),
-                state: free(c2, leave, w3),
-            });
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(leave, leave, 0.0),
-            });
+            phases.push(moving("leave", rng.range(1.4, 1.7), c2, leave, w3));
+            phases.push(rest(leave));
             surface = TruthSurface::Plane {
                 point_m: [0.55, 0.0, SURFACE_Z_M],
                 normal: [0.0, 0.0, 1.0],
@@ -339,16 +341,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let back = Vector3::new(0.5466, 0.02, 0.37);
             let (w1, w2) = (warp_of(&mut rng), warp_of(&mut rng));
             let (rise, fall) = (rng.range(0.08, 0.1), rng.range(0.1, 0.12));
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(hover, hover, 0.0),
-            });
-            phases.push(Phase {
-                label: "approach",
-                duration_s: rng.range(2.0, 2.3),
-                state: free(hover, contact, w1),
-            });
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(2.0, 2.3), hover, contact, w1));
             phases.push(Phase {
                 label: "touch",
                 duration_s: rise + fall,
@@ -366,16 +360,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     }
                 }),
             });
-            phases.push(Phase {
-                label: "return",
-                duration_s: rng.range(1.9, 2.2),
-                state: free(contact, back, w2),
-            });
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(back, back, 0.0),
-            });
+            phases.push(moving("return", rng.range(1.9, 2.2), contact, back, w2));
+            phases.push(rest(back));
             surface = TruthSurface::Plane {
                 point_m: [0.5466, 0.0, SURFACE_Z_M],
                 normal: [0.0, 0.0, 1.0],
@@ -394,16 +380,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let (rise, hold, release) = (rng.range(0.8, 1.0), rng.range(0.7, 0.9), rng.range(0.9, 1.1));
             let total = rise + hold + release;
             let wobble_phase = rng.range(0.0, 2.0 * PI);
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(hover, hover, 0.0),
-            });
-            phases.push(Phase {
-                label: "approach",
-                duration_s: rng.range(1.9, 2.2),
-                state: free(hover, contact, w1),
-            });
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(1.9, 2.2), hover, contact, w1));
             phases.push(Phase {
                 label: "press",
                 duration_s: total,
@@ -425,16 +403,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     }
                 }),
             });
-            phases.push(Phase {
-                label: "retract",
-                duration_s: rng.range(1.5, 1.8),
-                state: free(contact, back, w2),
-            });
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(back, back, 0.0),
-            });
+            phases.push(moving("retract", rng.range(1.5, 1.8), contact, back, w2));
+            phases.push(rest(back));
             surface = TruthSurface::Plane {
                 point_m: [0.5466, 0.0, SURFACE_Z_M],
                 normal: [0.0, 0.0, 1.0],
@@ -458,16 +428,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let (base, swing) = (7.0, 3.0);
             // Mean of base + swing·sin(π s) over the contour.
             force_n = base + swing * 2.0 / PI;
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(hover, hover, 0.0),
-            });
-            phases.push(Phase {
-                label: "approach",
-                duration_s: rng.range(1.5, 1.8),
-                state: free(hover, c1, w1),
-            });
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(1.5, 1.8), hover, c1, w1));
             phases.push(Phase {
                 label: "contour",
                 duration_s: contact_s,
@@ -488,16 +450,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     }
                 }),
             });
-            phases.push(Phase {
-                label: "leave",
-                duration_s: rng.range(1.4, 1.7),
-                state: free(c2, leave, w3),
-            });
-            phases.push(Phase {
-                label: "rest",
-                duration_s: 0.4,
-                state: free(leave, leave, 0.0),
-            });
+            phases.push(moving("leave", rng.range(1.4, 1.7), c2, leave, w3));
+            phases.push(rest(leave));
             surface = TruthSurface::Cylinder {
                 axis_point_m: centre.into(),
                 axis: [0.0, 1.0, 0.0],

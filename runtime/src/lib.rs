@@ -9,5 +9,6 @@ pub mod learn;
 pub mod plant;
 pub mod rng;
 pub mod robot;
+pub mod safety;
 pub mod sim;
 pub mod skill;

@@ -1,5 +1,5 @@
-//! The skill runtime (SPEC §8): binds a compiled skill and its learned features to a robot and a
-//! plant, and runs the state machine at 1 kHz through the hybrid controller.
+//! The skill runtime (docs/method.md §7): binds a compiled skill and its learned features to a
+//! robot and a plant, and runs the state machine at 1 kHz through the hybrid controller.
 //!
 //! Each tick: read the plant, compute the tool pose and the applied wrench, evaluate the current
 //! state's guards in order and take at most one transition (running the entry actions of the
@@ -12,13 +12,22 @@
 //! transform. Compliant frames keep their learned orientation; their origin is put at the tool
 //! point every tick (the contact is at the tool), except for constraints about a point or an
 //! axis (`fixed_point`, `axial_rotation`) and literal frames, whose origin means something.
+//!
+//! The parts: [`bind`] (names become ids, once), `rig` (plant and controller, one tick, the
+//! pre-positioning move), `motion` (starting DMPs), `machine` (the state machine), `run`
+//! ([`run_skill`], [`run_replay`]), [`log`](RunLog) (the tick record), `session` (a run or a
+//! task in a scene's simulation).
 
 mod bind;
 mod log;
 mod machine;
+mod motion;
+mod rig;
+mod run;
 mod session;
 
 pub use bind::{bind, BindError, BoundSkill};
 pub use log::{RunLog, Tick};
-pub use machine::{run_replay, run_skill, ExecError, ExecOptions, Rig, RunReport, Visit};
+pub use rig::Rig;
+pub use run::{replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit};
 pub use session::{simulate, simulate_task, Mode, SessionError, StepReport, TaskStep};

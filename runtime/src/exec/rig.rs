@@ -1,0 +1,200 @@
+//! The robot side of a run: the plant and the controller behind one interface that senses,
+//! acts and logs a tick, the fixed flange-to-tool transform, and the free-space move to a start
+//! pose (pre-positioning) that comes before a skill or a replay.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
+
+use super::log::{RunLog, Tick};
+use super::run::{ExecError, ExecOptions};
+use crate::control::{Command, HybridController};
+use crate::plant::{Observation, Plant};
+use crate::robot::RobotError;
+
+/// The robot side of a run: plant, controller, and the flange-to-tool transform.
+pub struct Rig<'p> {
+    /// The plant driven.
+    pub plant: &'p mut dyn Plant,
+    /// The controller.
+    pub controller: HybridController,
+    flange_to_tool: Isometry3<f64>,
+    obs: Observation,
+    torques: Vec<f64>,
+    t_s: f64,
+}
+
+impl std::fmt::Debug for Rig<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Rig")
+            .field("t_s", &self.t_s)
+            .field("flange_to_tool", &self.flange_to_tool)
+            .finish()
+    }
+}
+
+impl<'p> Rig<'p> {
+    /// A rig; `flange_link` is the link whose pose demonstrations record.
+    pub fn new(plant: &'p mut dyn Plant, controller: HybridController, flange_link: &str) -> Result<Self, RobotError> {
+        let robot = controller.robot();
+        let flange = robot.require_link(flange_link)?;
+        let mut data = robot.data();
+        let obs = plant.observe();
+        robot.check_dof(obs.q.len())?;
+        robot.forward_kinematics(&mut data, obs.q.as_slice());
+        let flange_to_tool = robot.link_in_base(&data, flange).inverse() * robot.tool_in_base(&data);
+        let torques = vec![0.0; obs.q.len()];
+        Ok(Rig {
+            plant,
+            controller,
+            flange_to_tool,
+            obs,
+            torques,
+            t_s: 0.0,
+        })
+    }
+
+    /// Run time so far \[s\].
+    pub fn time_s(&self) -> f64 {
+        self.t_s
+    }
+
+    /// The fixed transform from the flange to the tool point.
+    pub fn flange_to_tool(&self) -> &Isometry3<f64> {
+        &self.flange_to_tool
+    }
+
+    /// The last observation.
+    pub fn observation(&self) -> &Observation {
+        &self.obs
+    }
+
+    pub(super) fn sense(&mut self) {
+        self.plant.observe_into(&mut self.obs);
+        self.controller.observe(&self.obs);
+    }
+
+    pub(super) fn tool(&self) -> Isometry3<f64> {
+        self.controller.state().tool
+    }
+
+    pub(super) fn flange(&self) -> Isometry3<f64> {
+        self.tool() * self.flange_to_tool.inverse()
+    }
+
+    /// Computes and applies torques for `cmd`, steps the plant, and logs the tick.
+    pub(super) fn act(
+        &mut self,
+        cmd: &Command,
+        state: u32,
+        state_name: &str,
+        log: Option<&mut RunLog>,
+        dt: f64,
+    ) -> Result<(), ExecError> {
+        let torques = self.controller.torques(&self.obs, cmd, dt);
+        self.torques.copy_from_slice(torques);
+        if let Some(log) = log {
+            log.ticks
+                .push(tick_record(self.t_s, state, cmd, &self.controller, &self.torques));
+        }
+        let t_s = self.t_s;
+        let wrap = |source| ExecError::Plant {
+            state: state_name.to_string(),
+            t_s,
+            source,
+        };
+        self.plant.apply(&self.torques).map_err(wrap)?;
+        self.plant.step(dt).map_err(wrap)?;
+        self.t_s += dt;
+        Ok(())
+    }
+
+    /// The tool pose and twist commanded for a flange pose and twist.
+    pub(super) fn tool_command(
+        &self,
+        flange: &Isometry3<f64>,
+        flange_v: &Vector3<f64>,
+        omega: &Vector3<f64>,
+    ) -> (Isometry3<f64>, Vector6<f64>) {
+        let tool = flange * self.flange_to_tool;
+        let lever = flange.rotation * self.flange_to_tool.translation.vector;
+        let v = flange_v + omega.cross(&lever);
+        (tool, Vector6::new(v.x, v.y, v.z, omega.x, omega.y, omega.z))
+    }
+
+    /// Pure impedance control towards `pose` (tool point) with feed-forward `twist`: every axis
+    /// position-controlled, the frame at the tool point with the base's axes. Pre-positioning and
+    /// the replay baseline command this.
+    pub(super) fn impedance_hold(&self, pose: Isometry3<f64>, twist: Vector6<f64>, stiffness: [f64; 6]) -> Command {
+        let mut cmd = Command::hold(pose, stiffness);
+        cmd.twist = twist;
+        cmd.frame = Isometry3::from_parts(self.tool().translation, UnitQuaternion::identity());
+        cmd
+    }
+
+    /// Moves the flange to `target` in free space along a minimum-jerk path, then holds briefly.
+    pub(super) fn prepose(
+        &mut self,
+        target: &Isometry3<f64>,
+        options: &ExecOptions,
+        log: &mut Option<&mut RunLog>,
+    ) -> Result<(), ExecError> {
+        self.sense();
+        let start = self.flange();
+        let distance = (target.translation.vector - start.translation.vector).norm();
+        let angle = start.rotation.angle_to(&target.rotation);
+        let duration = (distance / 0.08).max(angle / 0.5).clamp(1.0, 8.0);
+        let hold = 0.3;
+        let state = log.as_mut().map_or(0, |log| log.state_index("prepose"));
+        let steps = ((duration + hold) / options.dt_s).round() as usize;
+        for step in 0..steps {
+            if step > 0 {
+                self.sense();
+            }
+            let u = (step as f64 * options.dt_s / duration).min(1.0);
+            let s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+            let position = start.translation.vector.lerp(&target.translation.vector, s);
+            let rotation = start.rotation.slerp(&target.rotation, s);
+            let flange = Isometry3::from_parts(Translation3::from(position), rotation);
+            let (pose, _) = self.tool_command(&flange, &Vector3::zeros(), &Vector3::zeros());
+            let cmd = self.impedance_hold(pose, Vector6::zeros(), options.replay_stiffness);
+            self.act(&cmd, state, "prepose", log.as_deref_mut(), options.dt_s)?;
+        }
+        Ok(())
+    }
+}
+
+fn tick_record(t_s: f64, state: u32, cmd: &Command, controller: &HybridController, torques: &[f64]) -> Tick {
+    let measured = &controller.state().tool;
+    let pose7 = |pose: &Isometry3<f64>| {
+        let q = pose.rotation.quaternion();
+        let p = pose.translation.vector;
+        [p.x, p.y, p.z, q.w, q.i, q.j, q.k]
+    };
+    let rotation_inv = cmd.frame.rotation.inverse();
+    let in_frame = |w: &Vector6<f64>| {
+        let f = rotation_inv * w.fixed_rows::<3>(0).into_owned();
+        let m = rotation_inv * w.fixed_rows::<3>(3).into_owned();
+        [f.x, f.y, f.z, m.x, m.y, m.z]
+    };
+    let applied = controller.state().applied;
+    let mut desired_cf = in_frame(&cmd.wrench);
+    let mut selection = 0u8;
+    for (axis, position) in cmd.position.iter().enumerate() {
+        if *position {
+            selection |= 1 << axis;
+            desired_cf[axis] = 0.0;
+        }
+    }
+    let z = cmd.frame.rotation * Vector3::z();
+    Tick {
+        t_s,
+        state,
+        desired: pose7(&cmd.pose),
+        measured: pose7(measured),
+        wrench_base: [applied[0], applied[1], applied[2], applied[3], applied[4], applied[5]],
+        wrench_cf: in_frame(&applied),
+        desired_cf,
+        frame_z: [z.x, z.y, z.z],
+        selection,
+        torques: torques.to_vec(),
+    }
+}

@@ -1,0 +1,305 @@
+//! A run on a rig: the skill's state machine tick by tick until a terminal state or the time
+//! limit ([`run_skill`]), or the thesis's replay baseline ([`run_replay`]); what a run is told
+//! ([`ExecOptions`]), how it ended ([`RunReport`]) and why it could not go on ([`ExecError`]).
+
+use nalgebra::Vector3;
+use skill_ir as ir;
+
+use super::bind::BoundSkill;
+use super::log::RunLog;
+use super::machine::{Machine, Sensed};
+use super::motion::{motion_start, motions_in_order, MotionRollout};
+use super::rig::Rig;
+use crate::control::Command;
+use crate::plant::PlantError;
+use crate::robot::RobotError;
+use crate::skill::Learned;
+
+/// How a run is carried out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExecOptions {
+    /// Control period \[s\] (1 ms, as on the LWR's fast research interface).
+    pub dt_s: f64,
+    /// A run longer than this fails \[s\].
+    pub max_duration_s: f64,
+    /// Task overrides (force scale, speed, goal offset).
+    pub overrides: ir::Overrides,
+    /// First move to the demonstration's start pose in free space, as an operator would.
+    pub prepose: bool,
+    /// Record every tick.
+    pub log: bool,
+    /// Stiffness of the replay baseline and of the pre-positioning move, per axis (N/m, N m/rad).
+    pub replay_stiffness: [f64; 6],
+}
+
+impl Default for ExecOptions {
+    fn default() -> Self {
+        ExecOptions {
+            dt_s: 0.001,
+            max_duration_s: 120.0,
+            overrides: ir::Overrides::default(),
+            prepose: true,
+            log: true,
+            replay_stiffness: [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0],
+        }
+    }
+}
+
+/// Why a run could not go on (a skill reaching a failure state is not an error).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExecError {
+    /// The plant failed (e.g. its state became NaN).
+    #[error("the plant failed in state `{state}` at t = {t_s:.3} s")]
+    Plant {
+        /// The state running when the plant failed (`prepose`, `replay:<motion>` or a skill state).
+        state: String,
+        /// Run time at the start of the failed step \[s\].
+        t_s: f64,
+        /// What the plant reported.
+        #[source]
+        source: PlantError,
+    },
+    /// The robot model does not fit the run.
+    #[error(transparent)]
+    Robot(#[from] RobotError),
+    /// A DMP could not be set up (non-finite goal or start, or a duration that is not positive).
+    #[error("cannot start motion `{motion}` in state `{state}`: {reason}")]
+    Motion {
+        /// The state whose motion or force profile it is (`replay:<motion>` in a replay).
+        state: String,
+        /// The learned motion, or the learned force whose profile it is.
+        motion: String,
+        /// The DMP's complaint (which value was out of range).
+        reason: String,
+    },
+}
+
+/// A time in one state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Visit {
+    /// The state's name.
+    pub state: String,
+    /// Entry \[s\].
+    pub enter_s: f64,
+    /// Exit \[s\].
+    pub exit_s: f64,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunReport {
+    /// Success or failure.
+    pub outcome: ir::Outcome,
+    /// The terminal state reached, if any.
+    pub terminal: Option<String>,
+    /// A message for the user (for failures: the state, the guard and where it is written).
+    pub message: String,
+    /// States in the order visited.
+    pub visits: Vec<Visit>,
+    /// Run time \[s\].
+    pub duration_s: f64,
+}
+
+/// The name of the replay state that covers `segment` (0-based): `replay:<motion>` for the
+/// segment's learned motion (the first by name), `replay:segment <n>` (1-based) without one.
+pub fn replay_state(learned: &Learned, segment: usize) -> String {
+    match learned.motions.iter().find(|(_, motion)| motion.segment == segment) {
+        Some((name, _)) => format!("replay:{name}"),
+        None => format!("replay:segment {}", segment + 1),
+    }
+}
+
+fn location(span: &ir::SourceSpan) -> String {
+    format!("{}:{}:{}", span.file, span.line, span.column)
+}
+
+/// Moves to the start of the first learned motion (moved by the goal offset), when asked to.
+fn prepose_for(
+    learned: &Learned,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+    log: &mut Option<&mut RunLog>,
+) -> Result<(), ExecError> {
+    if options.prepose {
+        if let Some((_, first)) = motions_in_order(learned).first() {
+            let mut target = motion_start(first);
+            target.translation.vector += Vector3::from(options.overrides.goal_offset_m);
+            rig.prepose(&target, options, log)?;
+        }
+    }
+    Ok(())
+}
+
+/// Runs a bound skill on a rig until a terminal state (or the time limit).
+pub fn run_skill(
+    bound: &BoundSkill<'_>,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+    mut log: Option<&mut RunLog>,
+) -> Result<RunReport, ExecError> {
+    let skill = bound.skill;
+    let start_s = rig.time_s();
+    prepose_for(bound.learned, rig, options, &mut log)?;
+    let run_start = rig.time_s();
+    rig.sense();
+    let mut machine = Machine::start(bound, options.overrides, rig)?;
+    let mut visits = vec![Visit {
+        state: machine.state().name.clone(),
+        enter_s: rig.time_s() - start_s,
+        exit_s: 0.0,
+    }];
+    let mut last_cmd: Option<Command> = None;
+    let dt = options.dt_s;
+    loop {
+        let t = rig.time_s();
+        let state = machine.state();
+        if let ir::StateKind::Terminal { outcome, message } = &state.kind {
+            let last = visits.last_mut().expect("a visit per state");
+            last.exit_s = t - start_s;
+            let text = message.clone().unwrap_or_else(|| match outcome {
+                ir::Outcome::Success => format!("reached `{}`", state.name),
+                ir::Outcome::Failure => format!("ended in failure state `{}`", state.name),
+            });
+            return Ok(RunReport {
+                outcome: *outcome,
+                terminal: Some(state.name.clone()),
+                message: text,
+                visits,
+                duration_s: t - start_s,
+            });
+        }
+        if t - run_start > options.max_duration_s {
+            let last = visits.last_mut().expect("a visit per state");
+            last.exit_s = t - start_s;
+            return Ok(RunReport {
+                outcome: ir::Outcome::Failure,
+                terminal: None,
+                message: format!(
+                    "the run exceeded {:.0} s in state `{}` ({})",
+                    options.max_duration_s,
+                    state.name,
+                    location(&state.span)
+                ),
+                visits,
+                duration_s: t - start_s,
+            });
+        }
+        let active = machine.active().expect("terminal states returned above");
+        let sensed = Sensed::of(rig, last_cmd.as_ref());
+        if let Some((target, transition)) = machine.choose(active, &sensed, rig, t) {
+            let last = visits.last_mut().expect("a visit per state");
+            last.exit_s = t - start_s;
+            let transition = &skill.transitions[transition];
+            visits.push(Visit {
+                state: skill.states[target.index()].name.clone(),
+                enter_s: t - start_s,
+                exit_s: 0.0,
+            });
+            machine.enter(target, t, rig)?;
+            if let ir::StateKind::Terminal {
+                outcome: ir::Outcome::Failure,
+                message,
+            } = &skill.states[target.index()].kind
+            {
+                let from = &skill.states[transition.from.index()].name;
+                let why = message
+                    .clone()
+                    .unwrap_or_else(|| format!("ended in failure state `{}`", skill.states[target.index()].name));
+                let timed_out = matches!(transition.guard, ir::Guard::Timeout { .. });
+                let text = format!(
+                    "{why}: {} `on {}` in state `{from}` ({})",
+                    if timed_out { "timed out on" } else { "left by" },
+                    transition.guard_text,
+                    location(&transition.span)
+                );
+                return Ok(RunReport {
+                    outcome: ir::Outcome::Failure,
+                    terminal: Some(skill.states[target.index()].name.clone()),
+                    message: text,
+                    visits,
+                    duration_s: t - start_s,
+                });
+            }
+            continue;
+        }
+
+        machine.advance(dt)?;
+        let cmd = machine.command(active, rig, t);
+        let state_index = log.as_mut().map_or(0, |log| log.state_index(&state.name));
+        rig.act(&cmd, state_index, &state.name, log.as_deref_mut(), dt)?;
+        rig.sense();
+        last_cmd = Some(cmd);
+    }
+}
+
+/// The thesis's baseline: the demonstration replayed under pure impedance control, with no
+/// force control and no contact adaptation. Segments run in order: a segment with a learned
+/// motion replays it from the current pose; a segment without one (e.g. the press itself)
+/// holds the pose for the segment's duration, as the demonstration did.
+pub fn run_replay(
+    learned: &Learned,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+    mut log: Option<&mut RunLog>,
+) -> Result<RunReport, ExecError> {
+    let start_s = rig.time_s();
+    let order = motions_in_order(learned);
+    prepose_for(learned, rig, options, &mut log)?;
+    let mut visits = Vec::new();
+    let dt = options.dt_s;
+    let speed = options.overrides.speed_factor;
+    let mut velocity = [0.0; 3];
+    rig.sense();
+    let mut held = rig.flange();
+    for (segment_index, segment) in learned.segments.iter().enumerate() {
+        let motion = order.iter().find(|(_, motion)| motion.segment == segment_index);
+        let state_name = replay_state(learned, segment_index);
+        let state = log.as_mut().map_or(0, |log| log.state_index(&state_name));
+        let enter_s = rig.time_s() - start_s;
+        match motion {
+            Some((name, motion)) => {
+                let mut rollout =
+                    MotionRollout::start(motion, &held, options.overrides.goal_offset_m, speed).map_err(|err| {
+                        ExecError::Motion {
+                            state: state_name.clone(),
+                            motion: (*name).clone(),
+                            reason: err.to_string(),
+                        }
+                    })?;
+                let steps = ((motion.position.tau_s / speed) / dt).round() as usize;
+                for _ in 0..steps {
+                    rollout.step(motion, dt);
+                    rollout.position.velocity_into(&mut velocity);
+                    held = rollout.flange();
+                    let (pose, twist) =
+                        rig.tool_command(&held, &Vector3::from(velocity), &rollout.orientation.angular_velocity());
+                    let cmd = rig.impedance_hold(pose, twist, options.replay_stiffness);
+                    rig.act(&cmd, state, &state_name, log.as_deref_mut(), dt)?;
+                    rig.sense();
+                }
+            }
+            None => {
+                let steps = (((segment.end_s - segment.start_s) / speed) / dt).round() as usize;
+                let (pose, _) = rig.tool_command(&held, &Vector3::zeros(), &Vector3::zeros());
+                for _ in 0..steps {
+                    let cmd = rig.impedance_hold(pose, nalgebra::Vector6::zeros(), options.replay_stiffness);
+                    rig.act(&cmd, state, &state_name, log.as_deref_mut(), dt)?;
+                    rig.sense();
+                }
+            }
+        }
+        visits.push(Visit {
+            state: state_name,
+            enter_s,
+            exit_s: rig.time_s() - start_s,
+        });
+    }
+    Ok(RunReport {
+        outcome: ir::Outcome::Success,
+        terminal: None,
+        message: "replayed every segment".to_string(),
+        visits,
+        duration_s: rig.time_s() - start_s,
+    })
+}

@@ -2,14 +2,17 @@
 //! for by a hash, holding everything the runtime needs plus quality figures.
 //!
 //! Top-level keys other tools rely on: `segments` (`{start_s, end_s}`), `frames` (name → a
-//! constant frame `{kind, origin, quaternion_wxyz}` or, per sample, the list of those), `forces`
+//! constant frame `{kind, origin, quaternion_wxyz}` or, per sample, the list of those; `kind` is
+//! a [`FrameKind`]), `forces`
 //! (name → `{kind, value_n}` for constants, a DMP otherwise), `quality`.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::fmt;
 
 use crate::dmp::{Dmp, QuatDmp};
+use crate::learn::constraint::ConstraintKind;
 
 /// The learned-file format version; bump on every change to the serialized form.
 pub const LEARNED_VERSION: u32 = 1;
@@ -94,12 +97,94 @@ pub struct LearnedSegment {
     pub end_index: usize,
 }
 
+/// How a learned frame was obtained. Serialised with the source language's names, which are
+/// also the names [`FrameKind::name`] gives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameKind {
+    /// The constraint model `fixed_point`.
+    FixedPoint,
+    /// The constraint model `point_on_plane`.
+    PointOnPlane,
+    /// The constraint model `planar`.
+    Planar,
+    /// The constraint model `cylinder`. Written `cylinder`, as the source language names it
+    /// (the IR's serde name `concentric_cylinder` is read too).
+    #[serde(rename = "cylinder", alias = "concentric_cylinder")]
+    ConcentricCylinder,
+    /// The constraint model `prismatic`.
+    Prismatic,
+    /// The constraint model `axial_rotation`.
+    AxialRotation,
+    /// z along the applied force (`force_aligned`).
+    ForceAligned,
+    /// A literal frame (`fixed`).
+    Fixed,
+}
+
+/// Where a learned frame's origin is when it is used as a control frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameOrigin {
+    /// The learned origin: it is a point of the task (the fixed point, a point on the hinge
+    /// axis, the literal frame's origin) that rotations and forces are about.
+    Learned,
+    /// The current tool point: only the frame's orientation was learned; its origin (a
+    /// centroid, a point on a line or cylinder axis, a sample's position) means nothing later.
+    AtTool,
+}
+
+impl FrameKind {
+    /// The name written in learned files and printed.
+    pub fn name(self) -> &'static str {
+        match self {
+            FrameKind::FixedPoint => "fixed_point",
+            FrameKind::PointOnPlane => "point_on_plane",
+            FrameKind::Planar => "planar",
+            FrameKind::ConcentricCylinder => "cylinder",
+            FrameKind::Prismatic => "prismatic",
+            FrameKind::AxialRotation => "axial_rotation",
+            FrameKind::ForceAligned => "force_aligned",
+            FrameKind::Fixed => "fixed",
+        }
+    }
+
+    /// Where a frame of this kind has its origin at run time.
+    pub fn origin(self) -> FrameOrigin {
+        match self {
+            FrameKind::FixedPoint | FrameKind::AxialRotation | FrameKind::Fixed => FrameOrigin::Learned,
+            FrameKind::PointOnPlane
+            | FrameKind::Planar
+            | FrameKind::ConcentricCylinder
+            | FrameKind::Prismatic
+            | FrameKind::ForceAligned => FrameOrigin::AtTool,
+        }
+    }
+}
+
+impl From<ConstraintKind> for FrameKind {
+    fn from(kind: ConstraintKind) -> Self {
+        match kind {
+            ConstraintKind::FixedPoint => FrameKind::FixedPoint,
+            ConstraintKind::PointOnPlane => FrameKind::PointOnPlane,
+            ConstraintKind::Planar => FrameKind::Planar,
+            ConstraintKind::ConcentricCylinder => FrameKind::ConcentricCylinder,
+            ConstraintKind::Prismatic => FrameKind::Prismatic,
+            ConstraintKind::AxialRotation => FrameKind::AxialRotation,
+        }
+    }
+}
+
+impl fmt::Display for FrameKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(self.name())
+    }
+}
+
 /// A frame pose in the base frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FramePose {
-    /// How it was obtained: a constraint model (`planar`, `concentric_cylinder`, ...),
-    /// `force_aligned`, or `fixed`.
-    pub kind: String,
+    /// How it was obtained.
+    pub kind: FrameKind,
     /// Origin \[m\].
     pub origin: [f64; 3],
     /// Orientation `[w, x, y, z]`.
@@ -118,10 +203,10 @@ impl FramePose {
     }
 
     /// A frame pose from an isometry.
-    pub fn from_isometry(kind: &str, pose: &Isometry3<f64>, t_s: Option<f64>) -> Self {
+    pub fn from_isometry(kind: FrameKind, pose: &Isometry3<f64>, t_s: Option<f64>) -> Self {
         let q = pose.rotation.quaternion();
         FramePose {
-            kind: kind.to_string(),
+            kind,
             origin: pose.translation.vector.into(),
             quaternion_wxyz: [q.w, q.i, q.j, q.k],
             t_s,
@@ -152,11 +237,12 @@ impl LearnedFrame {
         }
     }
 
-    /// The kind of the (first) pose.
-    pub fn kind(&self) -> &str {
+    /// The kind of the (first) pose; an empty list of samples (never written) counts as
+    /// `force_aligned`, the only kind learned per sample.
+    pub fn kind(&self) -> FrameKind {
         match self {
-            LearnedFrame::Constant(pose) => &pose.kind,
-            LearnedFrame::Samples(poses) => poses.first().map_or("", |p| p.kind.as_str()),
+            LearnedFrame::Constant(pose) => pose.kind,
+            LearnedFrame::Samples(poses) => poses.first().map_or(FrameKind::ForceAligned, |p| p.kind),
         }
     }
 }
@@ -257,7 +343,7 @@ pub struct MotionQuality {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConstraintQuality {
     /// The model.
-    pub kind: String,
+    pub kind: FrameKind,
     /// RMS position residual \[m\].
     pub residual_m: f64,
     /// RMS orientation residual \[rad\].
@@ -266,4 +352,42 @@ pub struct ConstraintQuality {
     pub force_agreement: f64,
     /// Whether it was chosen.
     pub chosen: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: [FrameKind; 8] = [
+        FrameKind::FixedPoint,
+        FrameKind::PointOnPlane,
+        FrameKind::Planar,
+        FrameKind::ConcentricCylinder,
+        FrameKind::Prismatic,
+        FrameKind::AxialRotation,
+        FrameKind::ForceAligned,
+        FrameKind::Fixed,
+    ];
+
+    #[test]
+    fn a_frame_kind_is_written_and_printed_with_one_name() {
+        for kind in ALL {
+            let written = serde_json::to_string(&kind).expect("serialises");
+            assert_eq!(written, format!("\"{}\"", kind.name()));
+            assert_eq!(serde_json::from_str::<FrameKind>(&written).expect("reads back"), kind);
+            assert_eq!(format!("{kind:<16}|"), format!("{:<16}|", kind.name()), "Display pads");
+        }
+        assert_eq!(FrameKind::ConcentricCylinder.name(), "cylinder");
+        let alias: FrameKind = serde_json::from_str("\"concentric_cylinder\"").expect("the IR's name is read");
+        assert_eq!(alias, FrameKind::ConcentricCylinder);
+    }
+
+    #[test]
+    fn only_points_of_the_task_keep_their_learned_origin() {
+        let learned: Vec<FrameKind> = ALL.into_iter().filter(|k| k.origin() == FrameOrigin::Learned).collect();
+        assert_eq!(
+            learned,
+            [FrameKind::FixedPoint, FrameKind::AxialRotation, FrameKind::Fixed]
+        );
+    }
 }

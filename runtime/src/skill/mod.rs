@@ -2,7 +2,7 @@
 //! driver that runs an IR learning plan ([`learn`]), the kinematic preview ([`rollout`]).
 //!
 //! The learned file is robot-agnostic: motions and frames describe the FLANGE pose of the
-//! demonstration (as recorded, SPEC §3). The runtime maps them to its control point (the tool)
+//! demonstration (as recorded, docs/method.md §1). The runtime maps them to its control point (the tool)
 //! with the robot's fixed flange-to-tool transform.
 
 pub mod learn;
@@ -11,5 +11,6 @@ pub mod rollout;
 
 pub use learn::{learn_skill, LearnError, LearnOptions};
 pub use learned::{
-    ir_hash, FramePose, Learned, LearnedForce, LearnedFrame, LearnedMotion, LearnedSegment, Quality, LEARNED_VERSION,
+    ir_hash, FrameKind, FrameOrigin, FramePose, Learned, LearnedForce, LearnedFrame, LearnedMotion, LearnedSegment,
+    Quality, LEARNED_VERSION,
 };

@@ -65,6 +65,18 @@ pub enum Segmentation {
     MaxForce(TouchConfig),
 }
 
+impl Segmentation {
+    /// The method's name as the source language writes it (`none`, `cluster`, ...).
+    pub fn method(&self) -> &'static str {
+        match self {
+            Segmentation::None => "none",
+            Segmentation::Cluster(_) => "cluster",
+            Segmentation::Changepoint(_) => "changepoint",
+            Segmentation::MaxForce(_) => "max_force",
+        }
+    }
+}
+
 /// Segments `demo` as `plan` says. With `expected` set, a different number of segments is an
 /// error (the demonstration does not fit the template).
 pub fn segment_demo(demo: &Demo, plan: &Segmentation, expected: Option<usize>) -> Result<Vec<Segment>, SegmentError> {

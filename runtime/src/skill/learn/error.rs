@@ -1,0 +1,84 @@
+//! Why a skill could not be learned from a demonstration: the driver's one error type.
+
+use crate::demo::DemoError;
+use crate::dmp::DmpError;
+use crate::learn::constraint::ConstraintError;
+use crate::learn::force::ForceError;
+use crate::learn::segment::SegmentError;
+
+/// Why a skill could not be learned from a demonstration.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LearnError {
+    /// Reading or preprocessing the demonstration failed.
+    #[error(transparent)]
+    Demo(#[from] DemoError),
+    /// The segmentation failed.
+    #[error("segmentation of `{source_name}` failed")]
+    Segment {
+        /// The demonstration.
+        source_name: String,
+        /// Why.
+        #[source]
+        source: SegmentError,
+    },
+    /// The segmentation found another number of segments than the template needs.
+    #[error("`{method}` found {found} segment(s) in `{source_name}`, the template needs {expected}")]
+    SegmentCount {
+        /// The method.
+        method: &'static str,
+        /// The demonstration.
+        source_name: String,
+        /// What was found.
+        found: usize,
+        /// What the template declares.
+        expected: usize,
+    },
+    /// A segment is too short for what is learned on it.
+    #[error("segment {segment} has {samples} sample(s), too few to learn `{name}`")]
+    TooShort {
+        /// 1-based segment.
+        segment: usize,
+        /// Its samples.
+        samples: usize,
+        /// The feature.
+        name: String,
+    },
+    /// No contact force where the template needs one.
+    #[error("no contact in `{source_name}` for `{name}`: the largest force is {peak_n:.2} N")]
+    NoContact {
+        /// The demonstration.
+        source_name: String,
+        /// The feature that needs contact.
+        name: String,
+        /// The largest force magnitude found \[N\].
+        peak_n: f64,
+    },
+    /// Fitting a frame failed.
+    #[error("cannot learn frame `{name}`")]
+    Frame {
+        /// The frame.
+        name: String,
+        /// Why.
+        #[source]
+        source: ConstraintError,
+    },
+    /// Fitting a DMP failed.
+    #[error("cannot learn `{name}`")]
+    Dmp {
+        /// The motion or force.
+        name: String,
+        /// Why.
+        #[source]
+        source: DmpError,
+    },
+    /// Extracting a force failed.
+    #[error("cannot learn force `{name}`")]
+    Force {
+        /// The force.
+        name: String,
+        /// Why.
+        #[source]
+        source: ForceError,
+    },
+}

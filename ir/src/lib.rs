@@ -262,21 +262,29 @@ pub struct FrameDecl {
     pub span: SourceSpan,
 }
 
-/// The six geometric constraint models (Subramani et al. 2018).
+/// The six geometric constraint models (Subramani et al. 2018). What each leaves free and the
+/// frame it gives are those of the runtime's fit (`skill_runtime::learn::constraint`,
+/// docs/method.md §4); "into the surface" is along the mean applied force.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ConstraintModel {
-    /// The tool point stays at one point; frame at the point, z along the mean applied force.
+    /// A point of the tool stays at one point and the tool rotates freely (a ball joint);
+    /// origin at the point, z along the mean applied force.
     FixedPoint,
-    /// The tool point moves on a plane while the orientation may rotate about the contact.
+    /// A point of the tool moves on a plane and the tool rotates freely; z is the plane's
+    /// normal, into the surface.
     PointOnPlane,
-    /// The tool slides on a plane with fixed orientation; z is the normal, into the surface.
+    /// The tool slides on a plane and rotates only about its normal; z is the normal, into the
+    /// surface, x the main direction of motion.
     Planar,
-    /// The tool moves on a cylinder; z points into the surface at the segment's centre, y along the axis.
+    /// The tool translates along an axis and rotates about it (a peg in a hole; `cylinder` in
+    /// source); z along the axis in the direction of travel, x from the axis towards the tool.
     ConcentricCylinder,
-    /// Motion along a line; x along the line.
+    /// The tool translates along a line without rotating (a drawer); x along the line in the
+    /// direction of travel, z along the applied force made perpendicular to the line.
     Prismatic,
-    /// Rotation about a fixed axis (a hinge); z along the axis.
+    /// The tool rotates about a fixed axis (a hinge); z along the axis, x from the axis
+    /// towards the tool.
     AxialRotation,
 }
 

@@ -1,6 +1,6 @@
 //! Dynamic Movement Primitives: 1-D DMPs sharing one canonical system, the quaternion DMP, force DMPs.
 //!
-//! # Parameterisation (SPEC §6)
+//! # Parameterisation (docs/method.md §2)
 //!
 //! Each channel `x` (a Cartesian coordinate or a force component) is one transformation system
 //!

@@ -5,17 +5,23 @@
 //! nowhere else. The driver that runs a skill's plan is [`crate::skill::learn`]; it segments
 //! with [`segment::segment_demo`] like any other caller.
 //!
+//! What the driver calls for each plan element:
+//!
 //! | plan element | config | call |
 //! |---|---|---|
 //! | read the demonstration | [`crate::demo::ReadOptions`], [`crate::demo::PreprocessConfig`] | [`crate::demo::read_csv`], [`crate::demo::preprocess`] |
 //! | segmentation (cluster, changepoint, max force, none) | [`segment::Segmentation::from_plan`] | [`segment::segment_demo`] |
 //! | constraint frame of a segment | [`constraint::ConstraintConfig::from_candidates`] | [`constraint::fit_constraints`] → `chosen().frame` |
-//! | force-aligned frame per sample / at a point | [`constraint::ForceFrameConfig`] | [`constraint::force_aligned_frames`], [`constraint::force_aligned_frame_at`] |
-//! | constant force (slide) | [`force::ConstantForceConfig`] | [`force::profile_along_axis`] then [`force::constant_normal_force`] |
-//! | force profile along CF z (contour) | — | [`force::profile_along`] then [`crate::dmp::fit_scalar`] |
-//! | force at a point (touch threshold) | — | [`force::force_at`] |
+//! | force-aligned frame per sample / at a point | [`constraint::ForceFrameConfig`] | [`constraint::force_aligned_frames`] (on the force without its friction part), [`constraint::force_aligned_frame_at`] |
+//! | constant force (slide) | [`force::ConstantForceConfig`] | the applied force along a frame axis, then [`force::constant_normal_force`] |
+//! | force magnitude along a frame axis (contour) | [`crate::dmp::DmpConfig`] | the smoothed applied force along the axis, then [`crate::dmp::fit_scalar`] |
+//! | force at a point, force threshold (touch) | — | the applied force along a frame axis at one sample |
 //! | motion of a segment | [`crate::dmp::DmpConfig`] | [`crate::dmp::Dmp::fit_points`], [`crate::dmp::QuatDmp::fit`] |
-//! | force DMP of a segment (press) | [`crate::dmp::DmpConfig`] | [`crate::dmp::fit_force`] |
+//! | force DMP of a segment (press) | [`crate::dmp::DmpConfig`] | [`crate::dmp::fit_force`] on the smoothed applied force |
+//!
+//! The driver measures forces along frame axes itself because a frame may turn from sample to
+//! sample; [`force::profile_along`], [`force::profile_along_axis`] and [`force::force_at`] are
+//! the same measurements for callers with the frames at hand (the benches, the tests).
 
 pub mod constraint;
 pub mod force;

@@ -19,7 +19,7 @@
 //!
 //! | model | origin | z | x |
 //! |---|---|---|---|
-//! | planar, point on plane | centroid of the (contact) points, on the plane | plane normal pointing *into* the surface (along the mean applied force; if there is no contact, pointing down, `−z_base`) | main direction of motion in the plane |
+//! | planar, point on plane | centroid of the segment's positions (planar) or of the moved tool points (point on plane), on the plane | plane normal pointing *into* the surface (along the mean applied force; if there is no contact, pointing down, `−z_base`) | main direction of motion in the plane |
 //! | prismatic | centroid on the line | mean applied force perpendicular to the line (else the minimal rotation of base z) | along the line, in the direction of travel |
 //! | concentric cylinder | point on the axis nearest the data | along the axis, in the direction of travel | towards the tool, perpendicular to the axis |
 //! | axial rotation (hinge) | point on the axis nearest the data | along the axis, right-handed with the demonstrated rotation | from the axis towards the tool |

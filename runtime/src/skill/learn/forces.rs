@@ -6,7 +6,7 @@ use skill_ir as ir;
 
 use super::smoothing::{smooth, smooth_points, smoothing_window};
 use super::{LearnError, Learner, CONTACT_N};
-use crate::dmp::{fit_scalar, Dmp, DmpConfig};
+use crate::dmp::{fit_force, fit_scalar, Dmp, DmpConfig};
 use crate::learn::force::{constant_normal_force, ConstantForceConfig, ForceError};
 use crate::skill::learned::{LearnedForce, LearnedThreshold};
 
@@ -58,7 +58,7 @@ impl Learner<'_> {
                 let peak = applied.iter().map(|f| f.norm()).fold(0.0, f64::max);
                 self.require_contact(&decl.name, peak)?;
                 let config = force_dmp_config(*basis);
-                let dmp = Dmp::fit_points(&config, &t, &applied).map_err(|source| LearnError::Dmp {
+                let dmp = fit_force(&config, &t, &applied).map_err(|source| LearnError::Dmp {
                     name: decl.name.clone(),
                     source,
                 })?;

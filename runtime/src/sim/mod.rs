@@ -1,10 +1,15 @@
-//! The simulation: the robot as a torque-controlled rapier multibody in a scene read from a TOML
-//! file, with a wrist force/torque sensor. rapier's own (glam) types never leave this module.
+//! The simulation (docs/method.md §7): the robot as a torque-controlled rapier multibody in a
+//! scene read from a TOML file, with a wrist force/torque sensor. rapier's own (glam) types never
+//! leave this module: `convert` is the one place values cross between nalgebra and rapier.
 
+mod build;
+mod contact;
+mod convert;
 mod rapier_plant;
 mod scene;
 mod sensor;
 
-pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError, SIM_F64};
+pub use convert::SIM_F64;
+pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError};
 pub use scene::{ObjectKind, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec};
 pub use sensor::{SensorConfig, WristSensor};

@@ -1,0 +1,79 @@
+//! Reading contacts: the contact wrench on the tool colliders from rapier's solver impulses,
+//! about the sensor origin, and what the wrist sensor makes of it.
+// `Real` is f32 or f64 depending on the rapier flavour: casts and conversions to it are identities in one.
+#![allow(clippy::unnecessary_cast, clippy::useless_conversion)]
+
+use nalgebra::{Rotation3, Vector3, Vector6};
+use rapier3d::prelude::PairContacts;
+
+use super::convert::{from_vec3, iso_of};
+use super::rapier_plant::RapierPlant;
+
+impl RapierPlant {
+    /// Sums the contact wrenches on the tool colliders about the sensor origin (base axes).
+    pub(super) fn contact_wrench(&self) -> Vector6<f64> {
+        let sensor_origin = self
+            .bodies
+            .get(self.links[self.sensor_body])
+            .map(|rb| (iso_of(rb.position()) * self.sensor_in_body).translation.vector)
+            .unwrap_or_else(Vector3::zeros);
+        let inv_dt = 1.0 / f64::from(self.params.dt);
+        let mut force = Vector3::zeros();
+        let mut moment = Vector3::zeros();
+        for tool in &self.tool_colliders {
+            for pair in self.narrow_phase.contact_pairs_with(*tool) {
+                let PairContacts::Rigid(rigid) = &pair.contacts else {
+                    continue;
+                };
+                let tool_is_first = pair.collider1 == *tool;
+                let Some(tool_collider) = self.colliders.get(*tool) else {
+                    continue;
+                };
+                let tool_pose = tool_collider.position();
+                for manifold in rigid.solver_manifolds() {
+                    let normal = from_vec3(manifold.data.normal);
+                    for point in &manifold.points {
+                        // rapier's impulses act on the first collider along the normal that points
+                        // from the first to the second: the push on the first is −n λ.
+                        let on_first = -(normal * f64::from(point.data.impulse)
+                            + from_vec3(point.data.warmstart_tangent_world))
+                            * inv_dt;
+                        let (on_tool, local) = if tool_is_first {
+                            (on_first, point.local_p1)
+                        } else {
+                            (-on_first, point.local_p2)
+                        };
+                        let at = from_vec3(tool_pose.transform_point(local));
+                        force += on_tool;
+                        moment += (at - sensor_origin).cross(&on_tool);
+                    }
+                }
+            }
+        }
+        Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
+    }
+
+    /// The sensor frame's rotation in the base frame.
+    fn sensor_rotation(&self) -> Rotation3<f64> {
+        self.bodies
+            .get(self.links[self.sensor_body])
+            .map(|rb| (iso_of(rb.position()) * self.sensor_in_body).rotation)
+            .unwrap_or_else(Rotation3::identity)
+    }
+
+    /// After a step: gathers the contact wrench and passes it through the wrist sensor
+    /// (sensor axes), storing the ideal wrench and the sensor's reading in sensor and base axes.
+    pub(super) fn sense_contacts(&mut self, dt: f64) {
+        let ideal = self.contact_wrench();
+        self.ideal_wrench_base = ideal;
+        let rot_t = self.sensor_rotation().inverse();
+        let force = rot_t * Vector3::new(ideal[0], ideal[1], ideal[2]);
+        let moment = rot_t * Vector3::new(ideal[3], ideal[4], ideal[5]);
+        let ideal_sensor = Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z);
+        self.wrench_sensor = self.sensor.measure(&ideal_sensor, dt);
+        let rot = rot_t.inverse();
+        let f_base = rot * Vector3::new(self.wrench_sensor[0], self.wrench_sensor[1], self.wrench_sensor[2]);
+        let m_base = rot * Vector3::new(self.wrench_sensor[3], self.wrench_sensor[4], self.wrench_sensor[5]);
+        self.wrench_base = Vector6::new(f_base.x, f_base.y, f_base.z, m_base.x, m_base.y, m_base.z);
+    }
+}

@@ -207,6 +207,7 @@ fn robot_json_has_exactly_the_documented_keys() {
             "gravity_torque",
             "jacobian",
             "joints",
+            "notes",
             "q",
             "robot",
             "tool_link",

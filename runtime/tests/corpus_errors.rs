@@ -35,7 +35,7 @@ fn malformed_urdfs_give_clear_errors() {
     let expected = [
         ("001", "malformed urdf"),
         ("002", "unknown link `zz`"),
-        ("003", "only serial chains"),
+        ("003", "several ends (`b`, `c`): name the tool link"),
         ("004", "needs an `<inertial>`"),
         ("005", "negative mass"),
         ("006", "not positive definite"),
@@ -46,7 +46,10 @@ fn malformed_urdfs_give_clear_errors() {
         ("011", "zero mass but a non-zero inertia"),
         ("012", "non-finite number in `joint j origin`"),
         ("013", "no movable joint"),
-        ("014", "malformed urdf"),
+        ("014", "not a URDF"),
+        ("015", "is a xacro file (macros and `${...}` expressions), not a URDF: expand it to plain URDF first"),
+        ("016", "is an SDF file, not a URDF"),
+        ("017", "is a MuJoCo MJCF file, not a URDF"),
     ];
     let files = corpus("urdf");
     assert_eq!(files.len(), expected.len());
@@ -62,6 +65,8 @@ fn malformed_urdfs_give_clear_errors() {
             "{}: `{message}` lacks `{needle}`",
             file.display()
         );
+        let name = file.file_name().expect("a file").to_string_lossy();
+        assert!(message.contains(name.as_ref()), "`{message}` does not name the file");
     }
 }
 

@@ -282,6 +282,7 @@ fn inspection_has_the_cli_json_keys() {
             "gravity_torque",
             "jacobian",
             "joints",
+            "notes",
             "q",
             "robot",
             "tool_link",

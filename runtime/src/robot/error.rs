@@ -54,13 +54,32 @@ pub enum RobotError {
         /// Their names, comma separated.
         roots: String,
     },
-    /// A link with more than one child joint: only serial chains are supported.
-    #[error("link `{link}` has several child joints ({joints}): only serial chains are supported")]
-    NotSerial {
-        /// The branching link.
-        link: String,
-        /// Its child joints, comma separated.
-        joints: String,
+    /// No tool link named and several ends of equally long chains to choose from.
+    #[error("robot `{robot}` branches into several ends ({ends}): name the tool link (`tool = \"...\"` in the scene, `--tool` on the command line)")]
+    AmbiguousTool {
+        /// The robot's name.
+        robot: String,
+        /// The candidate end links, comma separated.
+        ends: String,
+    },
+    /// A file that is not a URDF (xacro, SDF, MJCF, other XML, not XML).
+    #[error("robot file `{file}` is {what}, not a URDF: {hint}")]
+    NotUrdf {
+        /// The file (or `<string>`).
+        file: String,
+        /// What it looks like.
+        what: String,
+        /// What to do instead.
+        hint: String,
+    },
+    /// A problem in the model a file describes, with the file's name.
+    #[error("robot `{file}`: {source}")]
+    InFile {
+        /// The file (or `<string>`).
+        file: String,
+        /// The problem.
+        #[source]
+        source: Box<RobotError>,
     },
     /// A joint type the model does not support (floating, planar, spherical).
     #[error("joint `{joint}` has unsupported type `{kind}` (supported: revolute, continuous, prismatic, fixed)")]

@@ -47,6 +47,9 @@ pub struct Inspection {
     /// Mass moved by each joint (its body), kg (text output only).
     #[serde(skip)]
     pub body_masses: Vec<f64>,
+    /// What loading decided on the user's behalf (held branches, ignored base inertia, default
+    /// limits); lines starting with `warning:` deserve a look.
+    pub notes: Vec<String>,
 }
 
 impl Robot {
@@ -84,6 +87,7 @@ impl Robot {
             jacobian: jacobian.row_iter().map(|row| row.iter().copied().collect()).collect(),
             gravity_torque: gravity.iter().copied().collect(),
             body_masses: self.bodies.iter().map(|body| body.mass).collect(),
+            notes: self.notes.clone(),
         })
     }
 }
@@ -127,6 +131,9 @@ impl Inspection {
         }
         let cells: Vec<String> = self.gravity_torque.iter().map(|v| format!("{v:.4}")).collect();
         let _ = writeln!(out, "gravity torque [N m] [{}]", cells.join(", "));
+        for note in &self.notes {
+            let _ = writeln!(out, "note: {note}");
+        }
         out
     }
 }

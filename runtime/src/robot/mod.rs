@@ -15,6 +15,7 @@
 //! # assert!(tool_in_base.translation.z > 1.0);
 //! ```
 
+mod chain;
 mod dynamics;
 mod error;
 mod inspect;
@@ -24,7 +25,10 @@ mod model;
 pub use error::RobotError;
 pub use inspect::{Inspection, JointSummary};
 pub use kinematics::RobotData;
-pub use model::{Collision, Inertial, JointInfo, JointKind, LinkInfo, Robot, Shape};
+pub use model::{
+    Collision, Inertial, JointInfo, JointKind, LinkInfo, Robot, Shape, DEFAULT_EFFORT, DEFAULT_REVOLUTE_RANGE,
+    DEFAULT_VELOCITY,
+};
 
 /// The repo's KUKA LWR IV URDF with its probe tool (`examples/robots/lwr4.urdf`), compiled in so tests
 /// and tools work without the examples folder.

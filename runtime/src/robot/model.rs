@@ -1,6 +1,6 @@
-//! The robot model: a serial chain of rigid bodies read from a URDF, in f64 and SI units.
+//! The robot model: a serial chain of rigid bodies read from a URDF, in f64 and SI units, and the
+//! per-link and per-joint readers the chain builder (`chain.rs`) uses.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use nalgebra::{Isometry3, IsometryMatrix3, Matrix3, Rotation3, SymmetricEigen, Translation3, Vector3};
@@ -143,6 +143,9 @@ pub struct Robot {
     pub(crate) bodies: Vec<Body>,
     pub(crate) tool_link: usize,
     pub(crate) gravity: Vector3<f64>,
+    /// What loading decided on the user's behalf (held branches, ignored base inertia, default
+    /// limits), one line each, for `skillc robot`.
+    pub(crate) notes: Vec<String>,
 }
 
 impl Robot {
@@ -161,11 +164,21 @@ impl Robot {
     }
 
     fn from_urdf_named(text: &str, file: &str, tool_link: Option<&str>) -> Result<Robot, RobotError> {
+        super::chain::check_format(text, file)?;
         let urdf = urdf_rs::read_from_string(text).map_err(|err| RobotError::Urdf {
             file: file.to_owned(),
             message: err.to_string().replace('\n', " "),
         })?;
-        build(&urdf, tool_link)
+        super::chain::build(&urdf, tool_link).map_err(|source| RobotError::InFile {
+            file: file.to_owned(),
+            source: Box::new(source),
+        })
+    }
+
+    /// What loading decided on the user's behalf: branches held rigid, a fixed base's inertia
+    /// ignored, default limits. Lines starting with `warning:` deserve a look.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     /// The robot's URDF name.
@@ -244,7 +257,7 @@ impl Robot {
     }
 }
 
-fn unknown_link(name: &str, robot: &str, links: &[LinkInfo]) -> RobotError {
+pub(super) fn unknown_link(name: &str, robot: &str, links: &[LinkInfo]) -> RobotError {
     RobotError::UnknownLink {
         name: name.to_owned(),
         robot: robot.to_owned(),
@@ -264,7 +277,7 @@ fn finite(values: &[f64], item: impl FnOnce() -> String) -> Result<(), RobotErro
     }
 }
 
-fn pose(origin: &urdf_rs::Pose, item: impl Fn() -> String) -> Result<IsometryMatrix3<f64>, RobotError> {
+pub(super) fn pose(origin: &urdf_rs::Pose, item: impl Fn() -> String) -> Result<IsometryMatrix3<f64>, RobotError> {
     let [x, y, z] = origin.xyz.0;
     let [roll, pitch, yaw] = origin.rpy.0;
     finite(&[x, y, z, roll, pitch, yaw], item)?;
@@ -281,7 +294,7 @@ fn to_quaternion_pose(iso: &IsometryMatrix3<f64>) -> Isometry3<f64> {
     )
 }
 
-fn inertial(link: &urdf_rs::Link) -> Result<(Inertial, IsometryMatrix3<f64>), RobotError> {
+pub(super) fn inertial(link: &urdf_rs::Link) -> Result<(Inertial, IsometryMatrix3<f64>), RobotError> {
     let urdf_inertial = &link.inertial;
     let frame = pose(&urdf_inertial.origin, || format!("link {} inertial origin", link.name))?;
     let mass = urdf_inertial.mass.value;
@@ -326,7 +339,7 @@ fn inertial(link: &urdf_rs::Link) -> Result<(Inertial, IsometryMatrix3<f64>), Ro
     ))
 }
 
-fn collisions(link: &urdf_rs::Link) -> Result<Vec<Collision>, RobotError> {
+pub(super) fn collisions(link: &urdf_rs::Link) -> Result<Vec<Collision>, RobotError> {
     let mut out = Vec::with_capacity(link.collision.len());
     for (collision_idx, collision) in link.collision.iter().enumerate() {
         let item = || format!("link {} collision {collision_idx}", link.name);
@@ -367,7 +380,18 @@ fn collisions(link: &urdf_rs::Link) -> Result<Vec<Collision>, RobotError> {
     Ok(out)
 }
 
-fn joint_info(joint: &urdf_rs::Joint) -> Result<Option<JointInfo>, RobotError> {
+/// Effort limit assumed for a chain joint whose URDF gives none (N m or N).
+pub const DEFAULT_EFFORT: f64 = 100.0;
+
+/// Velocity limit assumed for a chain joint whose URDF gives none (rad/s or m/s).
+pub const DEFAULT_VELOCITY: f64 = 1.0;
+
+/// Position limits assumed for a revolute chain joint whose URDF gives none (lower = upper = 0), rad.
+pub const DEFAULT_REVOLUTE_RANGE: f64 = std::f64::consts::PI;
+
+/// The movable joint's description, or `None` for a fixed joint. Missing limits of a joint on
+/// the chain get the stated defaults with a note; impossible ones are errors.
+pub(super) fn joint_info(joint: &urdf_rs::Joint, notes: &mut Vec<String>) -> Result<Option<JointInfo>, RobotError> {
     let kind = match joint.joint_type {
         urdf_rs::JointType::Fixed => return Ok(None),
         urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointKind::Revolute,
@@ -387,7 +411,7 @@ fn joint_info(joint: &urdf_rs::Joint) -> Result<Option<JointInfo>, RobotError> {
         });
     }
     let limit = &joint.limit;
-    let (lower, upper) = if joint.joint_type == urdf_rs::JointType::Continuous {
+    let (mut lower, mut upper) = if joint.joint_type == urdf_rs::JointType::Continuous {
         (f64::NEG_INFINITY, f64::INFINITY)
     } else {
         (limit.lower, limit.upper)
@@ -399,14 +423,36 @@ fn joint_info(joint: &urdf_rs::Joint) -> Result<Option<JointInfo>, RobotError> {
     if lower.is_nan() || upper.is_nan() || lower > upper {
         return Err(bad(format!("lower {lower} is above upper {upper}")));
     }
-    if limit.effort.is_nan() || limit.effort <= 0.0 {
+    if lower == 0.0 && upper == 0.0 && kind == JointKind::Revolute {
+        (lower, upper) = (-DEFAULT_REVOLUTE_RANGE, DEFAULT_REVOLUTE_RANGE);
+        notes.push(format!(
+            "warning: joint `{}` gives no position limits (lower = upper = 0): using ±180°",
+            joint.name
+        ));
+    }
+    let mut effort = limit.effort;
+    if effort == 0.0 {
+        effort = DEFAULT_EFFORT;
+        notes.push(format!(
+            "warning: joint `{}` gives no effort limit: using {DEFAULT_EFFORT} {}",
+            joint.name,
+            if kind == JointKind::Revolute { "N m" } else { "N" }
+        ));
+    } else if effort.is_nan() || effort < 0.0 {
         return Err(bad(format!(
-            "effort {} must be positive for a torque-controlled joint",
-            limit.effort
+            "effort {effort} must be positive for a torque-controlled joint"
         )));
     }
-    if limit.velocity.is_nan() || limit.velocity <= 0.0 {
-        return Err(bad(format!("velocity {} must be positive", limit.velocity)));
+    let mut velocity = limit.velocity;
+    if velocity == 0.0 {
+        velocity = DEFAULT_VELOCITY;
+        notes.push(format!(
+            "warning: joint `{}` gives no velocity limit: using {DEFAULT_VELOCITY} {}",
+            joint.name,
+            if kind == JointKind::Revolute { "rad/s" } else { "m/s" }
+        ));
+    } else if velocity.is_nan() || velocity < 0.0 {
+        return Err(bad(format!("velocity {velocity} must be positive")));
     }
     let (damping, friction) = joint
         .dynamics
@@ -418,8 +464,8 @@ fn joint_info(joint: &urdf_rs::Joint) -> Result<Option<JointInfo>, RobotError> {
         axis: axis / norm,
         lower,
         upper,
-        velocity: limit.velocity,
-        effort: limit.effort,
+        velocity,
+        effort,
         damping,
         friction,
         parent_link: joint.parent.link.clone(),
@@ -428,7 +474,7 @@ fn joint_info(joint: &urdf_rs::Joint) -> Result<Option<JointInfo>, RobotError> {
 }
 
 /// Adds `inertial` (in link frame) placed at `link_in_body` to the body's mass properties.
-fn lump(body: &mut Body, inertial: &Inertial, link_in_body: &IsometryMatrix3<f64>) {
+pub(super) fn lump(body: &mut Body, inertial: &Inertial, link_in_body: &IsometryMatrix3<f64>) {
     if inertial.mass == 0.0 {
         return;
     }
@@ -444,141 +490,4 @@ fn lump(body: &mut Body, inertial: &Inertial, link_in_body: &IsometryMatrix3<f64
     body.inertia = shift(body.mass, body.inertia, body.com) + shift(inertial.mass, inertia, com.coords);
     body.com = new_com;
     body.mass = total;
-}
-
-fn build(urdf: &urdf_rs::Robot, tool_link: Option<&str>) -> Result<Robot, RobotError> {
-    let link_idx: HashMap<&str, usize> = urdf
-        .links
-        .iter()
-        .enumerate()
-        .map(|(idx, link)| (link.name.as_str(), idx))
-        .collect();
-    let mut parent_joint: Vec<Option<usize>> = vec![None; urdf.links.len()];
-    let mut child_joints: Vec<Vec<usize>> = vec![Vec::new(); urdf.links.len()];
-    for (joint_idx, joint) in urdf.joints.iter().enumerate() {
-        let find = |name: &str| {
-            link_idx.get(name).copied().ok_or_else(|| RobotError::JointLinkMissing {
-                joint: joint.name.clone(),
-                link: name.to_owned(),
-            })
-        };
-        let parent = find(&joint.parent.link)?;
-        let child = find(&joint.child.link)?;
-        if parent_joint[child].replace(joint_idx).is_some() {
-            return Err(RobotError::SeveralParents {
-                link: joint.child.link.clone(),
-            });
-        }
-        child_joints[parent].push(joint_idx);
-    }
-    let roots: Vec<usize> = (0..urdf.links.len())
-        .filter(|idx| parent_joint[*idx].is_none())
-        .collect();
-    if roots.len() != 1 {
-        return Err(RobotError::Roots {
-            count: roots.len(),
-            roots: roots
-                .iter()
-                .map(|idx| urdf.links[*idx].name.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
-        });
-    }
-    // Walk the chain from the root. A cycle cannot occur: every link has at most one parent and
-    // exactly one link has none, so following child joints visits each link at most once.
-    let mut order = vec![roots[0]];
-    let mut via: Vec<Option<usize>> = vec![None];
-    loop {
-        let last = order[order.len() - 1];
-        match child_joints[last].as_slice() {
-            [] => break,
-            [joint_idx] => {
-                let child = link_idx[urdf.joints[*joint_idx].child.link.as_str()];
-                order.push(child);
-                via.push(Some(*joint_idx));
-            }
-            several => {
-                return Err(RobotError::NotSerial {
-                    link: urdf.links[last].name.clone(),
-                    joints: several
-                        .iter()
-                        .map(|idx| format!("`{}`", urdf.joints[*idx].name))
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                })
-            }
-        }
-    }
-
-    let mut joints = Vec::new();
-    let mut links = Vec::new();
-    let mut bodies: Vec<Body> = Vec::new();
-    // The current link frame in the current body's frame (or the base frame before the first joint).
-    let mut link_in_body = IsometryMatrix3::identity();
-    for (link_idx_in_chain, urdf_link_idx) in order.iter().enumerate() {
-        let urdf_link = &urdf.links[*urdf_link_idx];
-        if let Some(joint_idx) = via[link_idx_in_chain] {
-            let urdf_joint = &urdf.joints[joint_idx];
-            let origin = pose(&urdf_joint.origin, || format!("joint {} origin", urdf_joint.name))?;
-            match joint_info(urdf_joint)? {
-                None => link_in_body *= origin,
-                Some(info) => {
-                    let joint_frame = link_in_body * origin;
-                    bodies.push(Body {
-                        rot0: *joint_frame.rotation.matrix(),
-                        pos0: joint_frame.translation.vector,
-                        axis: info.axis,
-                        kind: info.kind,
-                        mass: 0.0,
-                        com: Vector3::zeros(),
-                        inertia: Matrix3::zeros(),
-                    });
-                    joints.push(info);
-                    link_in_body = IsometryMatrix3::identity();
-                }
-            }
-        }
-        let (link_inertial, _) = inertial(urdf_link)?;
-        let body = joints.len().checked_sub(1);
-        if let Some(body_idx) = body {
-            lump(&mut bodies[body_idx], &link_inertial, &link_in_body);
-        }
-        links.push(LinkInfo {
-            name: urdf_link.name.clone(),
-            body,
-            link_in_body,
-            inertial: link_inertial,
-            collisions: collisions(urdf_link)?,
-        });
-    }
-    for (body, joint) in bodies.iter().zip(&joints) {
-        if body.mass <= 0.0 {
-            return Err(RobotError::MissingInertial {
-                joint: joint.name.clone(),
-                link: joint.child_link.clone(),
-            });
-        }
-    }
-    let tool_link = match tool_link {
-        None => links.len() - 1,
-        Some(name) => links
-            .iter()
-            .position(|link| link.name == name)
-            .ok_or_else(|| unknown_link(name, &urdf.name, &links))?,
-    };
-    let tool_has_joint = links[tool_link].body.is_some();
-    if joints.is_empty() || !tool_has_joint {
-        return Err(RobotError::NoMovingJoint {
-            robot: urdf.name.clone(),
-            tool: links[tool_link].name.clone(),
-        });
-    }
-    Ok(Robot {
-        name: urdf.name.clone(),
-        joints,
-        links,
-        bodies,
-        tool_link,
-        gravity: Vector3::new(0.0, 0.0, -9.81),
-    })
 }

@@ -143,11 +143,7 @@ impl Limits {
             "saturation" => &mut self.torque_saturation_s,
             "tracking" => &mut self.tracking_error_m,
             "tracking_angle" => &mut self.tracking_error_rad,
-            _ => {
-                return Err(LimitError::Unknown {
-                    name: name.to_string(),
-                })
-            }
+            _ => return Err(LimitError::Unknown { name: name.to_string() }),
         };
         *slot = value;
         Ok(())
@@ -229,7 +225,9 @@ mod tests {
     fn workspace_grows_by_the_margin_and_measures_distance_outside() {
         let points = [[0.0, 0.0, 0.5], [0.2, 0.1, 0.3]];
         let box_ = Workspace::around(points.iter(), 0.1).expect("points");
-        assert_eq!(box_.min, [-0.1, -0.1, 0.2]);
+        for (got, want) in box_.min.iter().zip([-0.1, -0.1, 0.2]) {
+            assert!((got - want).abs() < 1e-12);
+        }
         assert!((box_.max[0] - 0.3).abs() < 1e-12);
         assert_eq!(box_.outside_by([0.0, 0.0, 0.4]), 0.0);
         assert!((box_.outside_by([0.0, 0.0, 0.1]) - 0.1).abs() < 1e-12);
@@ -244,6 +242,9 @@ mod tests {
         limits.set("force", f64::INFINITY).expect("inf switches off");
         assert!(matches!(limits.set("sped", 1.0), Err(LimitError::Unknown { .. })));
         assert!(matches!(limits.set("force", -1.0), Err(LimitError::NotPositive { .. })));
-        assert!(matches!(limits.set("force", f64::NAN), Err(LimitError::NotPositive { .. })));
+        assert!(matches!(
+            limits.set("force", f64::NAN),
+            Err(LimitError::NotPositive { .. })
+        ));
     }
 }

@@ -138,9 +138,19 @@ impl fmt::Display for Violation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let unit = self.quantity.unit();
         if self.quantity == Quantity::NonFinite {
-            return write!(f, "{} in {} at t = {:.3} s", self.quantity.describe(), self.detail, self.t_s);
+            return write!(
+                f,
+                "{} in {} at t = {:.3} s",
+                self.quantity.describe(),
+                self.detail,
+                self.t_s
+            );
         }
-        let relation = if self.quantity.is_lower_bound() { "below" } else { "above" };
+        let relation = if self.quantity.is_lower_bound() {
+            "below"
+        } else {
+            "above"
+        };
         write!(
             f,
             "{}{} {:.4}{unit} {relation} the limit {:.4}{unit} at t = {:.3} s",
@@ -284,7 +294,7 @@ impl Supervisor {
                 joint_problem = Some((Quantity::JointMargin, margin, limits.joint_margin, idx));
             } else if fraction > limits.joint_speed_fraction {
                 joint_problem = Some((Quantity::JointSpeed, fraction, limits.joint_speed_fraction, idx));
-            } else if self.saturated_s[idx] > limits.torque_saturation_s {
+            } else if self.saturated_s[idx] > limits.torque_saturation_s + 0.5 * dt {
                 joint_problem = Some((
                     Quantity::TorqueSaturation,
                     self.saturated_s[idx],

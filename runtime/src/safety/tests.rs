@@ -125,7 +125,8 @@ fn torque_saturation_fires_only_after_its_window() {
     }
     let violation = check(&case, &mut supervisor).expect_err("past the window");
     assert_eq!(violation.quantity, Quantity::TorqueSaturation);
-    assert!(violation.detail.contains("lwr_joint_7") || violation.detail.contains("joint"));
+    assert_eq!(violation.joint, Some(6));
+    assert!(violation.detail.starts_with("joint `"), "{}", violation.detail);
     // Leaving saturation resets the window.
     let mut supervisor = Supervisor::new(&case.robot, limits());
     for tick in 0..300 {

@@ -12,6 +12,8 @@ mod check;
 pub mod diag;
 pub mod fmt;
 pub mod graph;
+mod import;
+pub mod render;
 pub mod source;
 pub mod syntax;
 pub mod units;
@@ -21,7 +23,6 @@ pub use diag::{Code, Diag, Severity};
 pub use source::{SourceFile, Span};
 
 use skill_ir as ir;
-use std::collections::HashMap;
 
 /// Largest source file accepted, in bytes. Templates are a few kilobytes; anything near this
 /// is the wrong file, and refusing it keeps `check` fast on any input.
@@ -66,6 +67,48 @@ pub fn compile_str(name: &str, text: &str) -> Compilation {
     })
 }
 
+/// Turns raw bytes into a source file, or a diagnostic pointing at the first invalid byte.
+pub fn decode(name: &str, bytes: Vec<u8>) -> Result<SourceFile, Box<(SourceFile, Diag)>> {
+    match String::from_utf8(bytes) {
+        Ok(text) => Ok(SourceFile::new(name, text)),
+        Err(err) => {
+            let valid_up_to = err.utf8_error().valid_up_to();
+            let lossy = String::from_utf8_lossy(err.as_bytes()).into_owned();
+            // Offsets in the lossy text match up to the first invalid byte.
+            let source = SourceFile::new(name, lossy);
+            let diag = Diag::new(
+                Code::InvalidUtf8,
+                0,
+                Span::new(valid_up_to, valid_up_to + 1),
+                format!("`{name}` is not valid UTF-8 text"),
+                "invalid byte here",
+            )
+            .help("skill templates are UTF-8 text; is this a binary file?");
+            Err(Box::new((source, diag)))
+        }
+    }
+}
+
+/// Compiles a root file given as bytes, which may not be UTF-8 text; see [`compile`].
+pub fn compile_bytes(
+    name: &str,
+    bytes: Vec<u8>,
+    load: &mut dyn FnMut(&str) -> Result<String, LoadError>,
+) -> Compilation {
+    match decode(name, bytes) {
+        Ok(root) => compile(root, load),
+        Err(invalid) => {
+            let (source, diag) = *invalid;
+            Compilation {
+                files: vec![source],
+                diags: vec![diag],
+                ast: Default::default(),
+                program: None,
+            }
+        }
+    }
+}
+
 /// Compiles `root`. `load` returns the text of an imported file given its path, which is
 /// the import string joined lexically to the importing file's directory.
 pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, LoadError>) -> Compilation {
@@ -74,50 +117,14 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
     let (root_ast, parse_diags) = syntax::parse(&files[0], 0);
     diags.extend(parse_diags);
 
-    // Load imports depth-first, detecting cycles on the current import stack.
     let mut asts: Vec<ast::File> = vec![root_ast];
-    let mut order: Vec<usize> = Vec::new();
-    let mut stack: Vec<usize> = vec![0];
-    load_imports(0, &mut files, &mut asts, &mut diags, &mut stack, &mut order, load);
-    order.push(0);
+    let order = import::load_all(&mut files, &mut asts, &mut diags, load);
 
     // Check every file's skills; tasks see all skills loaded.
+    let to_check = import::unique_skills(&order, &files, &asts, &mut diags);
+    let skill_names: Vec<&str> = to_check.iter().map(|(_, skill)| skill.name.name.as_str()).collect();
     let mut skills: Vec<ir::Skill> = Vec::new();
-    let mut skill_names: Vec<String> = Vec::new();
-    let mut first_definition: HashMap<&str, (usize, Span)> = HashMap::new();
-    let mut duplicates: Vec<Diag> = Vec::new();
-    let mut to_check: Vec<(usize, &ast::Skill)> = Vec::new();
-    for &file in &order {
-        for skill in &asts[file].skills {
-            match first_definition.get(skill.name.name.as_str()) {
-                Some(&(earlier_file, earlier_span)) => {
-                    let diag = Diag::new(
-                        Code::DuplicateName,
-                        file,
-                        skill.name.span,
-                        format!("skill `{}` is defined twice", skill.name.name),
-                        "second definition",
-                    );
-                    duplicates.push(if earlier_file == file {
-                        diag.label(earlier_span, "first defined here")
-                            .help("rename one of them")
-                    } else {
-                        diag.help(format!(
-                            "it is also defined in `{}`; rename one of them",
-                            files[earlier_file].name
-                        ))
-                    });
-                }
-                None => {
-                    first_definition.insert(&skill.name.name, (file, skill.name.span));
-                    skill_names.push(skill.name.name.clone());
-                    to_check.push((file, skill));
-                }
-            }
-        }
-    }
-    diags.extend(duplicates);
-    for (file, skill) in to_check {
+    for &(file, skill) in &to_check {
         let mut checker = check::Checker::new(file, &files[file], &mut diags);
         if let Some(lowered) = checker.skill(skill) {
             skills.push(lowered);
@@ -126,11 +133,10 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
     let mut tasks = Vec::new();
     {
         let source = files[0].clone();
-        let base_dir = parent_dir(&source.name);
-        let names: Vec<&str> = skill_names.iter().map(String::as_str).collect();
+        let base_dir = import::parent_dir(&source.name);
         let mut checker = check::Checker::new(0, &source, &mut diags);
         for task in &asts[0].tasks {
-            if let Some(lowered) = checker.task(task, &names, &base_dir) {
+            if let Some(lowered) = checker.task(task, &skill_names, &base_dir) {
                 tasks.push(lowered);
             }
         }
@@ -150,75 +156,5 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
         diags,
         ast: root_ast,
         program,
-    }
-}
-
-fn load_imports(
-    file: usize,
-    files: &mut Vec<SourceFile>,
-    asts: &mut Vec<ast::File>,
-    diags: &mut Vec<Diag>,
-    stack: &mut Vec<usize>,
-    order: &mut Vec<usize>,
-    load: &mut dyn FnMut(&str) -> Result<String, LoadError>,
-) {
-    let base_dir = parent_dir(&files[file].name);
-    let imports = asts[file].imports.clone();
-    for import in imports {
-        let path = check::join_path(&base_dir, &import.path);
-        if let Some(existing) = files.iter().position(|f| f.name == path) {
-            if stack.contains(&existing) {
-                let chain: Vec<&str> = stack
-                    .iter()
-                    .skip_while(|&&f| f != existing)
-                    .map(|&f| files[f].name.as_str())
-                    .chain(std::iter::once(path.as_str()))
-                    .collect();
-                diags.push(
-                    Diag::new(
-                        Code::ImportCycle,
-                        file,
-                        import.span,
-                        format!("import cycle: {}", chain.join(" -> ")),
-                        "this import closes the cycle",
-                    )
-                    .help("move what both files need into a third file that imports neither"),
-                );
-            }
-            continue;
-        }
-        let text = match load(&path) {
-            Ok(text) => text,
-            Err(err) => {
-                diags.push(
-                    Diag::new(
-                        Code::MissingImport,
-                        file,
-                        import.span,
-                        format!("cannot import `{path}`: {}", err.reason),
-                        "imported here",
-                    )
-                    .help("import paths are relative to the importing file"),
-                );
-                continue;
-            }
-        };
-        let index = files.len();
-        files.push(SourceFile::new(path, text));
-        let (parsed, parse_diags) = syntax::parse(&files[index], index);
-        diags.extend(parse_diags);
-        asts.push(parsed);
-        stack.push(index);
-        load_imports(index, files, asts, diags, stack, order, load);
-        stack.pop();
-        order.push(index);
-    }
-}
-
-/// The directory part of a `/`-separated path (empty for a bare file name).
-fn parent_dir(path: &str) -> String {
-    match path.rfind('/') {
-        Some(at) => path[..at].to_string(),
-        None => String::new(),
     }
 }

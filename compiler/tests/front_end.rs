@@ -1,21 +1,80 @@
 //! End-to-end tests of the front end: the corpus, IR and diagnostic snapshots, and the formatter.
+//!
+//! The corpus is `tests/corpus/ok` and `tests/corpus/err/{syntax,check,lint}` (by the phase of
+//! the code each file declares); the stdlib and example templates at the workspace root are
+//! compiled too. Files are compiled under the names `skillc` shows for them when run from the
+//! workspace root (`stdlib-skills/press.skill`), except that the corpus is named relative to
+//! this crate and an error file without its phase directory (`tests/corpus/err/unused.skill`):
+//! where a file is filed is not part of what its diagnostics say.
 
 use serde_json::Value;
-use skill_compiler::{Code, Compilation, Severity};
+use skill_compiler::{Code, Compilation, LoadError, Severity};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-/// Compiles a file the way `skillc` does, naming it relative to the package root so that
-/// snapshots do not depend on where the repository is checked out.
-fn compile(path: &Path) -> Compilation {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let relative = path.strip_prefix(root).unwrap_or(path);
-    skillc::frontend::compile_path(relative).expect("corpus files are readable")
+/// This crate's directory.
+fn crate_dir() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn skill_files(dir: &str) -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+/// The workspace root, where the stdlib and the examples live.
+fn workspace_root() -> PathBuf {
+    crate_dir().join("..")
+}
+
+/// A file to compile: where it is, and the name it is compiled under.
+struct Case {
+    path: PathBuf,
+    name: String,
+}
+
+impl Case {
+    /// The directory names of this case's directory stand for (`tests/corpus/err` for an
+    /// error file, the file's own directory otherwise).
+    fn shown_dir(&self) -> &str {
+        self.name.rsplit_once('/').map_or("", |(dir, _)| dir)
+    }
+
+    /// Reads a file by the name a compilation gives it: names in this case's shown
+    /// directory are read from its real one, all others from the workspace root.
+    fn read(&self, name: &str) -> std::io::Result<Vec<u8>> {
+        let real_dir = self.path.parent().expect("a file has a directory");
+        match name
+            .strip_prefix(self.shown_dir())
+            .and_then(|rest| rest.strip_prefix('/'))
+        {
+            Some(rest) if !self.shown_dir().is_empty() => std::fs::read(real_dir.join(rest)),
+            _ => std::fs::read(workspace_root().join(name)),
+        }
+    }
+
+    /// Compiles text under this case's name, reading imports the way `skillc` does.
+    fn compile_bytes(&self, bytes: Vec<u8>) -> Compilation {
+        let mut load = |import: &str| -> Result<String, LoadError> {
+            let bytes = self.read(import).map_err(|err| LoadError {
+                reason: err.to_string().to_lowercase(),
+            })?;
+            String::from_utf8(bytes).map_err(|_| LoadError {
+                reason: "not valid UTF-8 text".to_string(),
+            })
+        };
+        skill_compiler::compile_bytes(&self.name, bytes, &mut load)
+    }
+
+    /// Compiles the file the way `skillc` does.
+    fn compile(&self) -> Compilation {
+        self.compile_bytes(std::fs::read(&self.path).expect("corpus files are readable"))
+    }
+
+    /// The file's name without `.skill`.
+    fn stem(&self) -> String {
+        self.path.file_stem().expect("file name").to_string_lossy().into_owned()
+    }
+}
+
+/// The `.skill` files of a directory, sorted.
+fn skill_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap_or_else(|err| panic!("cannot list {}: {err}", dir.display()))
         .filter_map(Result::ok)
         .map(|entry| entry.path())
@@ -23,6 +82,44 @@ fn skill_files(dir: &str) -> Vec<PathBuf> {
         .collect();
     files.sort();
     files
+}
+
+/// The files of `dir` (relative to `base`), named relative to `base`.
+fn cases_in(base: &Path, dir: &str) -> Vec<Case> {
+    skill_files(&base.join(dir))
+        .into_iter()
+        .map(|path| {
+            let file = path.file_name().expect("file name").to_string_lossy().into_owned();
+            Case {
+                name: format!("{dir}/{file}"),
+                path,
+            }
+        })
+        .collect()
+}
+
+/// The templates that must compile cleanly: the ok corpus, the stdlib and the examples.
+fn ok_cases() -> Vec<Case> {
+    let mut cases = cases_in(crate_dir(), "tests/corpus/ok");
+    cases.extend(cases_in(&workspace_root(), "stdlib-skills"));
+    cases.extend(cases_in(&workspace_root(), "examples/tasks"));
+    cases
+}
+
+/// The phases of the diagnostic codes, each a directory of the error corpus.
+const PHASES: [&str; 3] = ["syntax", "check", "lint"];
+
+/// The error corpus, every phase, named without the phase directory.
+fn err_cases() -> Vec<Case> {
+    let mut cases = Vec::new();
+    for phase in PHASES {
+        for mut case in cases_in(crate_dir(), &format!("tests/corpus/err/{phase}")) {
+            case.name = format!("tests/corpus/err/{}.skill", case.stem());
+            cases.push(case);
+        }
+    }
+    cases.sort_by(|a, b| a.name.cmp(&b.name));
+    cases
 }
 
 /// The code an `err` corpus file declares on its first line: `// code: skill::check::x`.
@@ -39,20 +136,19 @@ fn declared_code(path: &Path) -> String {
 
 #[test]
 fn ok_corpus_compiles_without_diagnostics_and_matches_ir_snapshots() {
-    let mut files = skill_files("tests/corpus/ok");
-    files.extend(skill_files("stdlib-skills"));
-    files.extend(skill_files("examples/tasks"));
-    assert!(files.len() >= 8, "the ok corpus, stdlib and examples are all found");
-    for path in files {
-        let compilation = compile(&path);
-        let rendered = skillc::render::all_plain(&compilation, 80);
+    let cases = ok_cases();
+    assert!(cases.len() >= 8, "the ok corpus, stdlib and examples are all found");
+    for case in cases {
+        let path = &case.path;
+        let compilation = case.compile();
+        let rendered = skill_compiler::render::all_plain(&compilation, 80);
         assert!(
             compilation.diags.is_empty(),
             "{} has diagnostics:\n{rendered}",
             path.display()
         );
         let program = compilation.program.expect("no diagnostics means a program");
-        let name = path.file_stem().expect("file name").to_string_lossy().into_owned();
+        let name = case.stem();
         let dir = path
             .parent()
             .and_then(|p| p.file_name())
@@ -67,9 +163,17 @@ fn ok_corpus_compiles_without_diagnostics_and_matches_ir_snapshots() {
 
 #[test]
 fn err_corpus_reports_the_declared_code_and_matches_diagnostic_snapshots() {
-    for path in skill_files("tests/corpus/err") {
-        let compilation = compile(&path);
-        let code = declared_code(&path);
+    for case in err_cases() {
+        let path = &case.path;
+        let compilation = case.compile();
+        let code = declared_code(path);
+        let phase = path.parent().and_then(Path::file_name).expect("phase directory");
+        assert_eq!(
+            code.split("::").nth(1),
+            phase.to_str(),
+            "{} belongs in the directory of its code's phase",
+            path.display()
+        );
         let codes: BTreeSet<&str> = compilation.diags.iter().map(|d| d.code.as_str()).collect();
         assert!(
             codes.contains(code.as_str()),
@@ -84,9 +188,9 @@ fn err_corpus_reports_the_declared_code_and_matches_diagnostic_snapshots() {
                 path.display()
             );
         }
-        let source = String::from_utf8_lossy(&std::fs::read(&path).expect("readable")).into_owned();
-        let rendered = skillc::render::all_plain(&compilation, 80);
-        let name = path.file_stem().expect("file name").to_string_lossy().into_owned();
+        let source = String::from_utf8_lossy(&std::fs::read(path).expect("readable")).into_owned();
+        let rendered = skill_compiler::render::all_plain(&compilation, 80);
+        let name = case.stem();
         insta::with_settings!({ snapshot_path => "snapshots", prepend_module_to_snapshot => false }, {
             insta::assert_snapshot!(format!("diag__{name}"), format!("{source}\n----- diagnostics -----\n{rendered}"));
         });
@@ -98,10 +202,7 @@ const GENERATED: &[Code] = &[Code::FileTooLarge];
 
 #[test]
 fn every_code_has_a_corpus_file() {
-    let declared: BTreeSet<String> = skill_files("tests/corpus/err")
-        .iter()
-        .map(|p| declared_code(p))
-        .collect();
+    let declared: BTreeSet<String> = err_cases().iter().map(|case| declared_code(&case.path)).collect();
     for code in Code::ALL {
         if GENERATED.contains(code) {
             continue;
@@ -123,8 +224,11 @@ fn file_too_large_is_refused_before_parsing() {
 
 #[test]
 fn all_problems_of_a_file_are_reported_in_one_run() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus/err/many_problems.skill");
-    let compilation = compile(&path);
+    let case = err_cases()
+        .into_iter()
+        .find(|case| case.stem() == "many_problems")
+        .expect("many_problems.skill is in the error corpus");
+    let compilation = case.compile();
     let codes: BTreeSet<Code> = compilation.diags.iter().map(|d| d.code).collect();
     assert!(codes.len() >= 8, "expected many distinct problems, got {codes:?}");
 }
@@ -149,11 +253,9 @@ fn without_positions(mut value: Value) -> Value {
 
 #[test]
 fn formatting_is_idempotent_and_preserves_the_ir() {
-    let mut files = skill_files("tests/corpus/ok");
-    files.extend(skill_files("stdlib-skills"));
-    files.extend(skill_files("examples/tasks"));
-    for path in files {
-        let text = std::fs::read_to_string(&path).expect("readable");
+    for case in ok_cases() {
+        let path = &case.path;
+        let text = std::fs::read_to_string(path).expect("readable");
         let name = path.to_string_lossy().into_owned();
         let source = skill_compiler::SourceFile::new(name.clone(), text.as_str());
         let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
@@ -165,21 +267,9 @@ fn formatting_is_idempotent_and_preserves_the_ir() {
         let twice = skill_compiler::fmt::format(&source_once, &ast_once);
         assert_eq!(once, twice, "formatting {name} twice changes it");
 
-        // Compile both in the original directory so that imports resolve alike.
-        let original = compile(&path);
-        let mut load = |import: &str| {
-            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(import)).map_err(|err| {
-                skill_compiler::LoadError {
-                    reason: err.to_string(),
-                }
-            })
-        };
-        let relative = path
-            .strip_prefix(env!("CARGO_MANIFEST_DIR"))
-            .unwrap_or(&path)
-            .to_string_lossy()
-            .into_owned();
-        let reformatted = skill_compiler::compile(skill_compiler::SourceFile::new(relative, once.as_str()), &mut load);
+        // Compile both under the same name so that imports resolve alike.
+        let original = case.compile();
+        let reformatted = case.compile_bytes(once.into_bytes());
         let ir = |c: &Compilation| {
             without_positions(serde_json::to_value(c.program.as_ref().expect("compiles")).expect("serialises"))
         };
@@ -216,14 +306,18 @@ fn formatting_keeps_every_comment() {
 
 #[test]
 fn ir_carries_its_version_and_source_positions() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("stdlib-skills/press.skill");
-    let program = compile(&path).program.expect("press compiles");
+    let case = Case {
+        path: workspace_root().join("stdlib-skills/press.skill"),
+        name: "stdlib-skills/press.skill".to_string(),
+    };
+    let path = &case.path;
+    let program = case.compile().program.expect("press compiles");
     assert_eq!(program.ir_version, skill_ir::IR_VERSION);
     let press = program.skill("press").expect("press skill");
     let approach = &press.states[press.initial.index()];
     assert_eq!(approach.name, "approach");
     assert_eq!(approach.span.file, "stdlib-skills/press.skill");
-    let text = std::fs::read_to_string(&path).expect("readable");
+    let text = std::fs::read_to_string(path).expect("readable");
     let at = approach.span.start as usize;
     assert_eq!(
         &text[at..at + "approach".len()],

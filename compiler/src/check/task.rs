@@ -1,0 +1,194 @@
+//! Tasks: steps and fallbacks naming skills in scope, their inputs and overrides.
+
+use super::{join_ticked, suggest, Checker};
+use crate::ast;
+use crate::diag::Code;
+use crate::import::join_path;
+use crate::source::Span;
+use crate::units::Dim;
+use skill_ir as ir;
+use std::collections::HashMap;
+
+impl Checker<'_> {
+    /// Checks one task against the skills in scope and returns its IR when it has no error.
+    pub(crate) fn task(&mut self, task: &ast::Task, skills: &[&str], base_dir: &str) -> Option<ir::Task> {
+        let errors_before = self.error_count();
+        let mut names: HashMap<&str, (Span, bool)> = HashMap::new();
+        let mut fallback_index: HashMap<&str, u32> = HashMap::new();
+        for step in &task.steps {
+            if let Some((earlier, _)) = names.get(step.name.name.as_str()) {
+                let diag = self
+                    .diag(
+                        Code::DuplicateName,
+                        step.name.span,
+                        format!("step `{}` is declared twice", step.name.name),
+                        "second declaration",
+                    )
+                    .label(*earlier, "first declared here")
+                    .help("rename one of them");
+                self.report(diag);
+                continue;
+            }
+            names.insert(&step.name.name, (step.name.span, step.fallback));
+            if step.fallback {
+                let next = fallback_index.len() as u32;
+                fallback_index.insert(&step.name.name, next);
+            }
+        }
+        if !task.steps.iter().any(|step| !step.fallback) {
+            let diag = self
+                .diag(
+                    Code::NoStates,
+                    task.name.span,
+                    format!("task `{}` has no step", task.name.name),
+                    "nothing to run",
+                )
+                .help("add `step NAME = SKILL(demo: \"demo.csv\")`");
+            self.report(diag);
+        }
+        let mut steps = Vec::new();
+        let mut fallbacks = Vec::new();
+        for step in &task.steps {
+            if !skills.contains(&step.skill.name.as_str()) {
+                let help = suggest(&step.skill.name, skills.iter().copied()).unwrap_or_else(|| {
+                    if skills.is_empty() {
+                        "no skill is in scope: `import \"path/to/skill.skill\"`".to_string()
+                    } else {
+                        format!(
+                            "skills in scope: {}; import others with `import \"path.skill\"`",
+                            join_ticked(skills)
+                        )
+                    }
+                });
+                let diag = self
+                    .diag(
+                        Code::UnknownName,
+                        step.skill.span,
+                        format!("unknown skill `{}`", step.skill.name),
+                        "no skill of this name",
+                    )
+                    .help(help);
+                self.report(diag);
+            }
+            let bound = self.bind_args(
+                &step.skill.name,
+                &step.args,
+                &["demo", "learned", "force_scale", "speed", "goal_offset"],
+                0,
+            );
+            let input = match (bound.get("demo"), bound.get("learned")) {
+                (Some(demo), None) => self
+                    .string(demo, "`demo`")
+                    .map(|path| ir::StepInput::Demo(join_path(base_dir, &path))),
+                (None, Some(learned)) => self
+                    .string(learned, "`learned`")
+                    .map(|path| ir::StepInput::Learned(join_path(base_dir, &path))),
+                (Some(_), Some(learned)) => {
+                    let diag = self
+                        .diag(
+                            Code::BadArgument,
+                            learned.span,
+                            "a step takes `demo` or `learned`, not both",
+                            "second source",
+                        )
+                        .help("give the demonstration to learn from, or the file already learned");
+                    self.report(diag);
+                    None
+                }
+                (None, None) => {
+                    let span = step.span;
+                    self.missing_arg(
+                        &step.skill.name,
+                        "demo",
+                        span,
+                        &format!(
+                            "{}(demo: \"demos/{}.csv\")` or `learned: \"....json\"",
+                            step.skill.name, step.skill.name
+                        ),
+                    );
+                    None
+                }
+            };
+            let mut overrides = ir::Overrides::default();
+            if let Some(expr) = bound.get("force_scale") {
+                let value = self.plain_number(expr, "the force scale");
+                if let Some(value) = self.positive(value, expr.span, "the force scale") {
+                    overrides.force_scale = value;
+                }
+            }
+            if let Some(expr) = bound.get("speed") {
+                let value = self.plain_number(expr, "the speed factor");
+                if let Some(value) = self.positive(value, expr.span, "the speed factor") {
+                    overrides.speed_factor = value;
+                }
+            }
+            if let Some(expr) = bound.get("goal_offset") {
+                if let Some(offset) = self.vector3(expr, Dim::Length, "the goal offset") {
+                    overrides.goal_offset_m = offset;
+                }
+            }
+            let on_failure = match &step.on_failure {
+                None | Some(ast::OnFailure::Abort(_)) => Some(ir::OnFailure::Abort),
+                Some(ast::OnFailure::Fallback(name)) => {
+                    match (fallback_index.get(name.name.as_str()), names.get(name.name.as_str())) {
+                        (Some(index), _) => Some(ir::OnFailure::Fallback(*index)),
+                        (None, Some((span, _))) => {
+                            let diag = self
+                                .diag(
+                                    Code::WrongKind,
+                                    name.span,
+                                    format!("`{}` is a step, not a fallback", name.name),
+                                    "not a fallback",
+                                )
+                                .label(*span, "declared as a step here")
+                                .help(format!("declare it with `fallback {} = ...`", name.name));
+                            self.report(diag);
+                            None
+                        }
+                        (None, None) => {
+                            let fallback_names: Vec<&str> = fallback_index.keys().copied().collect();
+                            let help = suggest(&name.name, fallback_names.iter().copied()).unwrap_or_else(|| {
+                                format!("declare it: `fallback {} = SKILL(demo: \"...\")`", name.name)
+                            });
+                            let diag = self
+                                .diag(
+                                    Code::UnknownName,
+                                    name.span,
+                                    format!("unknown fallback `{}`", name.name),
+                                    "no fallback of this name",
+                                )
+                                .help(help);
+                            self.report(diag);
+                            None
+                        }
+                    }
+                }
+            };
+            if let (Some(input), Some(on_failure)) = (input, on_failure) {
+                let lowered = ir::Step {
+                    name: step.name.name.clone(),
+                    skill: step.skill.name.clone(),
+                    input,
+                    overrides,
+                    on_failure,
+                    span: self.ir_span(step.span),
+                };
+                if step.fallback {
+                    fallbacks.push(lowered);
+                } else {
+                    steps.push(lowered);
+                }
+            }
+        }
+        if self.error_count() > errors_before {
+            return None;
+        }
+        Some(ir::Task {
+            name: task.name.name.clone(),
+            doc: task.doc.join("\n"),
+            steps,
+            fallbacks,
+            span: self.ir_span(task.name.span),
+        })
+    }
+}

@@ -33,7 +33,7 @@ fn check_exits_zero_on_the_standard_library() {
 
 #[test]
 fn check_exits_one_on_errors_and_two_on_a_missing_file() {
-    let out = skillc(&["check", "tests/corpus/err/unknown_name.skill"]);
+    let out = skillc(&["check", "compiler/tests/corpus/err/check/unknown_name.skill"]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("skill::check::unknown_name"), "{stderr}");
@@ -50,14 +50,19 @@ fn check_exits_one_on_errors_and_two_on_a_missing_file() {
 
 #[test]
 fn warnings_pass_unless_denied() {
-    let file = "tests/corpus/err/unused.skill";
+    let file = "compiler/tests/corpus/err/lint/unused.skill";
     assert_eq!(skillc(&["check", file]).status.code(), Some(0));
     assert_eq!(skillc(&["check", "--deny-warnings", file]).status.code(), Some(1));
 }
 
 #[test]
 fn check_json_prints_one_object_per_diagnostic() {
-    let out = skillc(&["check", "--format", "json", "tests/corpus/err/many_problems.skill"]);
+    let out = skillc(&[
+        "check",
+        "--format",
+        "json",
+        "compiler/tests/corpus/err/check/many_problems.skill",
+    ]);
     assert_eq!(out.status.code(), Some(1));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let objects: Vec<serde_json::Value> = stdout
@@ -79,7 +84,7 @@ fn check_json_prints_one_object_per_diagnostic() {
         ] {
             assert!(object.get(key).is_some(), "missing `{key}` in {object}");
         }
-        assert_eq!(object["file"], "tests/corpus/err/many_problems.skill");
+        assert_eq!(object["file"], "compiler/tests/corpus/err/check/many_problems.skill");
     }
     let first = &objects[0];
     assert_eq!(first["code"], "skill::check::expect_mismatch");
@@ -103,7 +108,7 @@ fn compile_writes_the_ir_or_nothing() {
     let bad = dir.join("bad.ir.json");
     let out = skillc(&[
         "compile",
-        "tests/corpus/err/dead_end.skill",
+        "compiler/tests/corpus/err/check/dead_end.skill",
         "-o",
         bad.to_str().expect("utf8 path"),
     ]);

@@ -1,4 +1,5 @@
-//! Repository hygiene: every Rust file says what it is for, and no snapshot is orphaned.
+//! Repository hygiene: every Rust file says what it is for. (That no snapshot is orphaned is
+//! checked next to the snapshots, in `compiler/tests/front_end.rs`.)
 
 use std::path::{Path, PathBuf};
 
@@ -35,34 +36,4 @@ fn every_rust_file_starts_with_a_module_doc_line() {
         offenders.is_empty(),
         "files without a leading `//!` line: {offenders:?}"
     );
-}
-
-#[test]
-fn every_snapshot_belongs_to_a_corpus_or_stdlib_file() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut snapshots = Vec::new();
-    files_with_extension(&root.join("tests/snapshots"), "snap", &mut snapshots);
-    for snapshot in snapshots {
-        let name = snapshot.file_stem().expect("name").to_string_lossy().into_owned();
-        let source = if let Some(rest) = name.strip_prefix("diag__") {
-            root.join("tests/corpus/err").join(format!("{rest}.skill"))
-        } else if let Some(rest) = name.strip_prefix("ir__") {
-            let (dir, file) = rest.split_once("__").expect("ir__DIR__FILE");
-            let dir = match dir {
-                "ok" => root.join("tests/corpus/ok"),
-                "stdlib-skills" => root.join("stdlib-skills"),
-                "tasks" => root.join("examples/tasks"),
-                other => panic!("snapshot {name} names an unknown directory {other}"),
-            };
-            dir.join(format!("{file}.skill"))
-        } else {
-            continue;
-        };
-        assert!(
-            source.exists(),
-            "orphaned snapshot {} (no {})",
-            snapshot.display(),
-            source.display()
-        );
-    }
 }

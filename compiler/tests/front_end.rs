@@ -70,6 +70,17 @@ impl Case {
     fn stem(&self) -> String {
         self.path.file_stem().expect("file name").to_string_lossy().into_owned()
     }
+
+    /// The name of the IR snapshot of a file that compiles: `ir__DIR__FILE`.
+    fn ir_snapshot(&self) -> String {
+        let dir = self.path.parent().and_then(Path::file_name).expect("parent dir");
+        format!("ir__{}__{}", dir.to_string_lossy(), self.stem())
+    }
+
+    /// The name of the diagnostics snapshot of an error file: `diag__FILE`.
+    fn diag_snapshot(&self) -> String {
+        format!("diag__{}", self.stem())
+    }
 }
 
 /// The `.skill` files of a directory, sorted.
@@ -148,15 +159,8 @@ fn ok_corpus_compiles_without_diagnostics_and_matches_ir_snapshots() {
             path.display()
         );
         let program = compilation.program.expect("no diagnostics means a program");
-        let name = case.stem();
-        let dir = path
-            .parent()
-            .and_then(|p| p.file_name())
-            .expect("parent dir")
-            .to_string_lossy()
-            .into_owned();
         insta::with_settings!({ snapshot_path => "snapshots", prepend_module_to_snapshot => false }, {
-            insta::assert_yaml_snapshot!(format!("ir__{dir}__{name}"), program);
+            insta::assert_yaml_snapshot!(case.ir_snapshot(), program);
         });
     }
 }
@@ -190,9 +194,8 @@ fn err_corpus_reports_the_declared_code_and_matches_diagnostic_snapshots() {
         }
         let source = String::from_utf8_lossy(&std::fs::read(path).expect("readable")).into_owned();
         let rendered = skill_compiler::render::all_plain(&compilation, 80);
-        let name = case.stem();
         insta::with_settings!({ snapshot_path => "snapshots", prepend_module_to_snapshot => false }, {
-            insta::assert_snapshot!(format!("diag__{name}"), format!("{source}\n----- diagnostics -----\n{rendered}"));
+            insta::assert_snapshot!(case.diag_snapshot(), format!("{source}\n----- diagnostics -----\n{rendered}"));
         });
     }
 }
@@ -328,4 +331,26 @@ fn ir_carries_its_version_and_source_positions() {
     let json = serde_json::to_string(&program).expect("serialises");
     let back: skill_ir::Program = serde_json::from_str(&json).expect("deserialises");
     assert_eq!(back, program);
+}
+
+#[test]
+fn every_snapshot_belongs_to_a_corpus_stdlib_or_example_file() {
+    let expected: BTreeSet<String> = ok_cases()
+        .iter()
+        .map(Case::ir_snapshot)
+        .chain(err_cases().iter().map(Case::diag_snapshot))
+        .collect();
+    let dir = crate_dir().join("tests/snapshots");
+    let snapshots = std::fs::read_dir(&dir).unwrap_or_else(|err| panic!("cannot list {}: {err}", dir.display()));
+    for entry in snapshots.filter_map(Result::ok) {
+        let path = entry.path();
+        if path.extension().is_some_and(|ext| ext == "snap") {
+            let name = path.file_stem().expect("name").to_string_lossy().into_owned();
+            assert!(
+                expected.contains(&name),
+                "orphaned snapshot {} (no corpus, stdlib or example file of that name)",
+                path.display()
+            );
+        }
+    }
 }

@@ -31,7 +31,8 @@ impl Severity {
 macro_rules! codes {
     ($($(#[doc = $doc:literal])* $variant:ident => $code:literal, $severity:ident;)*) => {
         /// Every diagnostic code. The doc comment on each says when it fires and shows a
-        /// minimal `.skill` fragment that triggers it; `tests/corpus/` holds one file per code.
+        /// minimal `.skill` fragment that triggers it; `compiler/tests/corpus/err/` holds one
+        /// file per code.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[non_exhaustive]
         pub enum Code {

@@ -1,5 +1,5 @@
-//! The `learn` block: declared names and ids, preprocessing, segments, points of the
-//! demonstration and motions.
+//! The `learn` block: declared names and their ids, preprocessing, and the declarations in
+//! order (segments, then frames, motions, forces and thresholds); motions and DMP bases.
 
 use super::scope::{SkillScope, Sym, SymKind, BUILTIN_FRAMES};
 use super::signatures::{Produces, Signature};

@@ -3,9 +3,10 @@
 //!
 //! Resolution and lowering are one walk here: each resolved value already is its IR form,
 //! and the IR is only kept when the walk reported no error. The walk is one [`Checker`]
-//! whose methods are spread over the files of this module by job: [`values`] (numbers,
-//! units, arguments), [`scope`] (names), [`learn`], [`segments`], [`frames`] and [`forces`]
-//! (the learn block, whose functions [`signatures`] lists), [`states`], [`guards`] and [`reach`] (the state machine), and [`task`].
+//! whose methods are spread over this module's files by job: [`values`] (numbers, units,
+//! call arguments), [`scope`] (names), [`learn`], [`segments`], [`frames`] and [`forces`]
+//! (the learn block, whose functions [`signatures`] lists), [`states`], [`guards`] and
+//! [`reach`] (the state machine), and [`task`].
 
 mod forces;
 mod frames;
@@ -23,26 +24,16 @@ use crate::ast;
 use crate::diag::{did_you_mean, Code, Diag, Severity};
 use crate::source::{SourceFile, Span};
 use scope::SkillScope;
+use signatures::Signature;
 use skill_ir as ir;
 
 pub use learn::{DEFAULT_FORCE_BASIS, DEFAULT_MOTION_BASIS};
 pub use states::{DEFAULT_GAINS, DEFAULT_STIFFNESS};
 
-/// Common aliases people type for a canonical name.
-fn alias_of(name: &str) -> Option<&'static str> {
-    Some(match name {
-        "plane" => "planar",
-        "concentric_cylinder" => "cylinder",
-        "hinge" => "axial_rotation",
-        "point" => "fixed_point",
-        "peak" | "max_force_point" => "peak_force",
-        _ => return None,
-    })
-}
-
-/// "did you mean `x`?" for the candidate nearest to `name`, preferring a known alias.
+/// "did you mean `x`?" for the candidate nearest to `name`, preferring the function `name` is
+/// an alias of.
 fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str> + Clone) -> Option<String> {
-    if let Some(alias) = alias_of(name) {
+    if let Some(alias) = Signature::alias_of(name) {
         if candidates.clone().into_iter().any(|c| c == alias) {
             return Some(format!("did you mean `{alias}`?"));
         }

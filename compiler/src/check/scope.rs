@@ -1,5 +1,5 @@
 //! Names in a skill's scope: learned frames, motions, forces and thresholds, the built-in
-//! frames, axes, and the warning for names learned but never used.
+//! frames, frame axes (and the `along` argument), and the warning for names never used.
 
 use super::values::Args;
 use super::{join_ticked, suggest, Checker};

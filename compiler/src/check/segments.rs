@@ -1,4 +1,5 @@
-//! `segments = ...`: the segmentation method of the demonstration, its features and its cut.
+//! `segments = ...`: the segmentation method of the demonstration, its features and its cut;
+//! and references to the segments and points of the demonstration it yields.
 
 use super::scope::SkillScope;
 use super::signatures::{Function, Produces, Signature};

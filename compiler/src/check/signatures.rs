@@ -3,7 +3,10 @@
 //! "did you mean" candidates and "frames come from ..." lists from it; a test holds
 //! `docs/language.md` to it. Each entry's [`Function`] is its mapping to the IR.
 
+use ir::ConstraintModel as M;
 use skill_ir as ir;
+use Function as F;
+use Produces as P;
 
 /// What a learn function produces, which is also where it may be written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,6 +67,8 @@ pub(super) struct Signature {
     pub(super) positional: usize,
     /// A call with its required arguments, quoted as "write `EXAMPLE`" when one is missing.
     pub(super) example: &'static str,
+    /// Other names people type for it, which "did you mean" maps to it.
+    pub(super) aliases: &'static [&'static str],
 }
 
 const fn sig(
@@ -81,153 +86,63 @@ const fn sig(
         params,
         positional,
         example,
+        aliases: &[],
     }
 }
 
-use ir::ConstraintModel as M;
-use Function as F;
-use Produces as P;
+impl Signature {
+    /// This signature, with other names people type for it.
+    const fn aka(self, aliases: &'static [&'static str]) -> Signature {
+        Signature { aliases, ..self }
+    }
+}
+
+/// The parameters of `cluster` and `changepoint`, longer than fit on their lines below.
+const CLUSTER_PARAMS: &[&str] = &[
+    "linkage",
+    "time_weight",
+    "connectivity",
+    "cut",
+    "min_length",
+    "features",
+];
+const CHANGEPOINT_PARAMS: &[&str] = &["min_length", "models", "particles", "features"];
 
 /// Every learn function. The order within a kind is the order of help lists, and the order
 /// of the constraint models is the order `constraint` tries them in.
+#[rustfmt::skip] // One line a function reads as a table.
 pub(super) const LEARN_FUNCTIONS: &[Signature] = &[
     sig("none", P::Segmentation, F::NoSegments, &[], 0, "none"),
     sig("max_force", P::Segmentation, F::MaxForce, &[], 0, "max_force"),
-    sig(
-        "cluster",
-        P::Segmentation,
-        F::Cluster,
-        &[
-            "linkage",
-            "time_weight",
-            "connectivity",
-            "cut",
-            "min_length",
-            "features",
-        ],
-        0,
-        "cluster(cut: count(3))",
-    ),
-    sig(
-        "changepoint",
-        P::Segmentation,
-        F::Changepoint,
-        &["min_length", "models", "particles", "features"],
-        0,
-        "changepoint(min_length: 0.2 s) expect 3",
-    ),
+    sig("cluster", P::Segmentation, F::Cluster, CLUSTER_PARAMS, 0, "cluster(cut: count(3))"),
+    sig("changepoint", P::Segmentation, F::Changepoint, CHANGEPOINT_PARAMS, 0, "changepoint(min_length: 0.2 s) expect 3"),
+
     sig("count", P::Cut, F::Count, &["n"], 1, "count(3)"),
     sig("distance", P::Cut, F::Distance, &["d"], 1, "distance(2.5)"),
-    sig("peak_force", P::Point, F::PeakForce, &[], 0, "peak_force"),
+
+    sig("peak_force", P::Point, F::PeakForce, &[], 0, "peak_force").aka(&["peak", "max_force_point"]),
     sig("end", P::Point, F::End, &["segment"], 1, "end(segment 1)"),
     sig("start", P::Point, F::Start, &["segment"], 1, "start(segment 1)"),
-    sig(
-        "fixed_point",
-        P::Frame,
-        F::Model(M::FixedPoint),
-        &["segment"],
-        1,
-        "fixed_point(segment 2)",
-    ),
-    sig(
-        "point_on_plane",
-        P::Frame,
-        F::Model(M::PointOnPlane),
-        &["segment"],
-        1,
-        "point_on_plane(segment 2)",
-    ),
-    sig(
-        "planar",
-        P::Frame,
-        F::Model(M::Planar),
-        &["segment"],
-        1,
-        "planar(segment 2)",
-    ),
-    sig(
-        "cylinder",
-        P::Frame,
-        F::Model(M::ConcentricCylinder),
-        &["segment"],
-        1,
-        "cylinder(segment 2)",
-    ),
-    sig(
-        "prismatic",
-        P::Frame,
-        F::Model(M::Prismatic),
-        &["segment"],
-        1,
-        "prismatic(segment 2)",
-    ),
-    sig(
-        "axial_rotation",
-        P::Frame,
-        F::Model(M::AxialRotation),
-        &["segment"],
-        1,
-        "axial_rotation(segment 2)",
-    ),
-    sig(
-        "constraint",
-        P::Frame,
-        F::Constraint,
-        &["segment", "models"],
-        1,
-        "constraint(segment 2)",
-    ),
-    sig(
-        "force_aligned",
-        P::Frame,
-        F::ForceAligned,
-        &["segment", "at"],
-        1,
-        "force_aligned(segment 2)` or `force_aligned(at: peak_force)",
-    ),
-    sig(
-        "fixed",
-        P::Frame,
-        F::Fixed,
-        &["origin", "rpy"],
-        0,
-        "fixed(origin: [0 m, 0 m, 0.1 m])",
-    ),
+
+    sig("fixed_point", P::Frame, F::Model(M::FixedPoint), &["segment"], 1, "fixed_point(segment 2)").aka(&["point"]),
+    sig("point_on_plane", P::Frame, F::Model(M::PointOnPlane), &["segment"], 1, "point_on_plane(segment 2)"),
+    sig("planar", P::Frame, F::Model(M::Planar), &["segment"], 1, "planar(segment 2)").aka(&["plane"]),
+    sig("cylinder", P::Frame, F::Model(M::ConcentricCylinder), &["segment"], 1, "cylinder(segment 2)").aka(&["concentric_cylinder"]),
+    sig("prismatic", P::Frame, F::Model(M::Prismatic), &["segment"], 1, "prismatic(segment 2)"),
+    sig("axial_rotation", P::Frame, F::Model(M::AxialRotation), &["segment"], 1, "axial_rotation(segment 2)").aka(&["hinge"]),
+    sig("constraint", P::Frame, F::Constraint, &["segment", "models"], 1, "constraint(segment 2)"),
+    sig("force_aligned", P::Frame, F::ForceAligned, &["segment", "at"], 1, "force_aligned(segment 2)` or `force_aligned(at: peak_force)"),
+    sig("fixed", P::Frame, F::Fixed, &["origin", "rpy"], 0, "fixed(origin: [0 m, 0 m, 0.1 m])"),
+
     sig("dmp", P::Motion, F::Dmp, &["segment", "basis"], 1, "dmp(segment 1)"),
-    sig(
-        "constant",
-        P::Force,
-        F::Constant,
-        &["segment", "along"],
-        1,
-        "constant(segment 2, along: surface.z)",
-    ),
-    sig(
-        "force_at",
-        P::Force,
-        F::ForceAt,
-        &["point", "along"],
-        1,
-        "force_at(end(segment 1), along: contact.z)",
-    ),
+
+    sig("constant", P::Force, F::Constant, &["segment", "along"], 1, "constant(segment 2, along: surface.z)"),
+    sig("force_at", P::Force, F::ForceAt, &["point", "along"], 1, "force_at(end(segment 1), along: contact.z)"),
     sig("dmp", P::Force, F::Dmp, &["segment", "basis"], 1, "dmp(segment 2)"),
-    sig(
-        "magnitude",
-        P::Force,
-        F::Magnitude,
-        &["segment", "along", "basis"],
-        1,
-        "magnitude(segment 2, along: surface.z)",
-    ),
+    sig("magnitude", P::Force, F::Magnitude, &["segment", "along", "basis"], 1, "magnitude(segment 2, along: surface.z)"),
     sig("tracked", P::Force, F::Tracked, &[], 0, "tracked"),
-    sig(
-        "force_at",
-        P::Threshold,
-        F::ForceAt,
-        &["point", "along", "scale"],
-        1,
-        "force_at(end(segment 1), along: contact.z)",
-    ),
+
+    sig("force_at", P::Threshold, F::ForceAt, &["point", "along", "scale"], 1, "force_at(end(segment 1), along: contact.z)"),
 ];
 
 impl Signature {
@@ -245,6 +160,14 @@ impl Signature {
             .filter(|sig| sig.produces == produces)
             .map(|sig| sig.name)
             .collect()
+    }
+
+    /// The name `alias` stands for, if it is an alias of a learn function.
+    pub(super) fn alias_of(alias: &str) -> Option<&'static str> {
+        LEARN_FUNCTIONS
+            .iter()
+            .find(|sig| sig.aliases.contains(&alias))
+            .map(|sig| sig.name)
     }
 
     /// The constraint models by name, in the order `constraint` tries them.

@@ -58,18 +58,7 @@ impl Checker<'_> {
                     self.report(diag);
                     return None;
                 }
-                let value = number.value * factor;
-                if !value.is_finite() {
-                    let diag = self.diag(
-                        Code::OutOfRange,
-                        expr.span,
-                        format!("{what} is not finite"),
-                        "too large",
-                    );
-                    self.report(diag);
-                    return None;
-                }
-                Some(value)
+                self.finite(number.value * factor, expr.span, what)
             }
             ExprKind::Number(number) => {
                 let diag = self
@@ -96,20 +85,20 @@ impl Checker<'_> {
         }
     }
 
+    /// `value`, or `None` after reporting that it is not finite.
+    fn finite(&mut self, value: f64, span: Span, what: &str) -> Option<f64> {
+        if value.is_finite() {
+            return Some(value);
+        }
+        let diag = self.diag(Code::OutOfRange, span, format!("{what} is not finite"), "too large");
+        self.report(diag);
+        None
+    }
+
     /// A plain number (gains, scales, weights).
     pub(super) fn plain_number(&mut self, expr: &ast::Expr, what: &str) -> Option<f64> {
         match &expr.kind {
-            ExprKind::Number(number) if number.value.is_finite() => Some(number.value),
-            ExprKind::Number(_) => {
-                let diag = self.diag(
-                    Code::OutOfRange,
-                    expr.span,
-                    format!("{what} is not finite"),
-                    "too large",
-                );
-                self.report(diag);
-                None
-            }
+            ExprKind::Number(number) => self.finite(number.value, expr.span, what),
             ExprKind::Quantity { unit, number } => {
                 let diag = self
                     .diag(
@@ -210,6 +199,13 @@ impl Checker<'_> {
         params: &[&'static str],
         positional: usize,
     ) -> HashMap<&'static str, &'e ast::Expr> {
+        let takes = || {
+            if params.is_empty() {
+                format!("`{function}` takes no arguments")
+            } else {
+                format!("`{function}` takes {}", join_ticked(params))
+            }
+        };
         let mut bound: HashMap<&'static str, &'e ast::Expr> = HashMap::new();
         let mut next_positional = 0;
         for arg in args {
@@ -217,13 +213,7 @@ impl Checker<'_> {
                 Some(key) => match params.iter().find(|p| **p == key.name) {
                     Some(param) => *param,
                     None => {
-                        let help = suggest(&key.name, params.iter().copied()).unwrap_or_else(|| {
-                            if params.is_empty() {
-                                format!("`{function}` takes no arguments")
-                            } else {
-                                format!("`{function}` takes {}", join_ticked(params))
-                            }
-                        });
+                        let help = suggest(&key.name, params.iter().copied()).unwrap_or_else(takes);
                         let diag = self
                             .diag(
                                 Code::BadArgument,
@@ -239,9 +229,9 @@ impl Checker<'_> {
                 None => {
                     if next_positional >= positional {
                         let help = if params.is_empty() {
-                            format!("`{function}` takes no arguments")
+                            takes()
                         } else {
-                            format!("name it: `{function}` takes {}", join_ticked(params))
+                            format!("name it: {}", takes())
                         };
                         let diag = self
                             .diag(

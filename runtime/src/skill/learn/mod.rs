@@ -5,8 +5,8 @@
 //! forces and thresholds. A demonstration that does not fit the template (no contact in a force
 //! skill, another number of segments than the template expects) is an error, not a file.
 //!
-//! One file per job: [`frames`], [`motions`], [`forces`] (with thresholds), the smoothing they
-//! share, and the error type; this file holds the driver and the sample lookups all of them use.
+//! One file per job: `frames`, `motions`, `forces` (with thresholds), the `smoothing` they
+//! share, and the `error` type; this file holds the driver and the sample lookups all of them use.
 
 mod error;
 mod forces;

@@ -11,7 +11,7 @@
 //!   pressing, Coulomb friction against the sliding direction;
 //! - wrist sensor noise (0.15 N, 4 mN m white) and a constant bias (about 0.2 N).
 //!
-//! Columns follow SPEC §3: the flange pose in the base frame and the wrench the environment
+//! Columns follow docs/method.md §1: the flange pose in the base frame and the wrench the environment
 //! exerts on the tool, in the base frame, with the moment about the flange (sensor origin).
 //! The flange-to-tip offset and the starting orientation come from the bundled LWR-IV model at
 //! the scenes' start configuration, so a demonstration and a reproduction share one geometry.
@@ -575,7 +575,7 @@ fn touch_down_lift_off(local: f64, total: f64, level: f64) -> f64 {
     level * envelope * release
 }
 
-/// The demonstration as CSV with the SPEC §3 columns (6 decimals: µm, µN).
+/// The demonstration as CSV with the columns of docs/method.md §1 (6 decimals: µm, µN).
 pub fn to_csv(demo: &Demonstration) -> String {
     let mut out = String::with_capacity(demo.samples.len() * 120);
     out.push_str("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n");

@@ -1,6 +1,6 @@
 //! The `Plant` interface the controller drives (simulated or real arm), and a model-based test plant.
 //!
-//! Sign convention (SPEC §3, everywhere in skillc): the wrench a plant reports is the force and moment
+//! Sign convention (docs/method.md §1, everywhere in skillc): the wrench a plant reports is the force and moment
 //! the **environment exerts on the tool**. The force the robot applies to the environment is its negative.
 
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3, Vector6};

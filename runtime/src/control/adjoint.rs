@@ -1,5 +1,5 @@
 //! Adjoint maps between a compliant frame and the control frame, and the selection and
-//! stiffness operators Ω and Ω̃ of the hybrid law (SPEC §7, thesis eq. 4.18-4.21).
+//! stiffness operators Ω and Ω̃ of the hybrid law (docs/method.md §6, thesis eq. 4.18-4.21).
 //!
 //! Twists are ordered `[v; ω]`, wrenches `[f; m]`. With the compliant frame's pose relative to
 //! the control frame given by rotation `R` and translation `p`:

@@ -1,4 +1,4 @@
-//! The adjoint-based hybrid position/force controller (SPEC §7, thesis 4.1.4 and 4.2.3).
+//! The adjoint-based hybrid position/force controller (docs/method.md §6, thesis 4.1.4 and 4.2.3).
 //!
 //! Cartesian impedance with a quaternion orientation error plus PI force control with a
 //! saturated integral, combined per axis of a compliant frame by the selection `S` and the
@@ -14,9 +14,9 @@
 //! of the sensor reading, which is what the environment exerts on the tool), taken about the tool
 //! point. `e_p = [p_d − p; θ]` with `θ` the rotation vector of `q_d q⁻¹`, `e_f = f_d − f`.
 //!
-//! Corrections to the thesis text (SPEC §7): damping opposes velocity, and gravity `g(q)` is a
+//! Corrections to the thesis text (docs/method.md §6): damping opposes velocity, and gravity `g(q)` is a
 //! joint-space term outside `Jᵀ(·)`. Additions: force feed-forward `Ω̃ f_d`, a desired-velocity
-//! feed-forward on the position axes (`P = Ad S Ad⁻¹`; with `ẋ_d = 0` the law is exactly SPEC's),
+//! feed-forward on the position axes (`P = Ad S Ad⁻¹`; with `ẋ_d = 0` the law is exactly the written one),
 //! null-space posture control for the redundant joint, joint-velocity braking and torque limits.
 //! The integral is kept in compliant-frame coordinates so that a rotating frame (contour) does
 //! not drag a stale integral along; for a fixed frame it equals `sat(∫ Ω̃ e_f dt)`.

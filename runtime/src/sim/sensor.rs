@@ -1,7 +1,7 @@
 //! The wrist force/torque sensor model: ideal contact wrench, then bias, seeded white noise and a
 //! first-order low-pass, like a real strain-gauge wrist sensor.
 //!
-//! Sign convention (SPEC §3): the sensor measures the force the environment exerts on the tool.
+//! Sign convention (docs/method.md §1): the sensor measures the force the environment exerts on the tool.
 
 use nalgebra::Vector6;
 use serde::{Deserialize, Serialize};

@@ -8,15 +8,15 @@ use std::path::PathBuf;
 
 fn slide_closed_loop(c: &mut Criterion) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let Ok((_, skill)) = skillc::learn_cmd::load_skill(&root.join("stdlib-skills/slide.skill"), None) else {
+    let Ok((_, skill)) = skillc::load::load_skill(&root.join("stdlib-skills/slide.skill"), None) else {
         panic!("slide compiles")
     };
     let Ok(learned) =
-        skillc::learn_cmd::learn_from_files(&skill, &root.join("examples/demos/slide.csv"), &LearnOptions::default())
+        skillc::load::learn_from_files(&skill, &root.join("examples/demos/slide.csv"), &LearnOptions::default())
     else {
         panic!("slide learns")
     };
-    let Ok(scene) = skillc::run_cmd::load_scene(&root.join("examples/scenes/table.toml"), &[]) else {
+    let Ok(scene) = skillc::load::load_scene(&root.join("examples/scenes/table.toml"), &[]) else {
         panic!("scene")
     };
     let bound = bind(&skill, &learned).expect("binds");

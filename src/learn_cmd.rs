@@ -2,12 +2,14 @@
 //! features from one demonstration, and previewing what was learned.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use skill_runtime::demo::{read_csv, ReadOptions};
-use skill_runtime::skill::{learn_skill, LearnOptions, Learned, LearnedForce, LearnedFrame};
+use skill_runtime::exec::bind;
+use skill_runtime::skill::{LearnOptions, Learned, LearnedForce, LearnedFrame};
 
-use crate::{atomic, frontend, render};
+use crate::atomic;
+use crate::load::{learn_from_file, load_skill, read_learned, Failure};
+use crate::plot::{self, Plot, Subject};
 
 /// Arguments of `skillc learn`.
 #[derive(Debug, Clone, clap::Args)]
@@ -38,110 +40,6 @@ pub struct LearnArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// Why a command failed: a problem with the input (exit 1) or with usage or IO (exit 2).
-#[derive(Debug)]
-pub enum Failure {
-    /// Exit 1.
-    Input(String),
-    /// Exit 2.
-    Usage(String),
-}
-
-impl Failure {
-    /// Prints the message and returns the exit code.
-    pub fn report(self) -> u8 {
-        match self {
-            Failure::Input(message) => {
-                eprintln!("error: {message}");
-                1
-            }
-            Failure::Usage(message) => {
-                eprintln!("error: {message}");
-                2
-            }
-        }
-    }
-}
-
-/// Compiles a `.skill` file and picks one skill of it (`name`, or the only one).
-pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program, skill_ir::Skill), Failure> {
-    let compilation = frontend::compile_path(path).map_err(|err| Failure::Usage(err.to_string()))?;
-    let Some(program) = compilation.program.clone() else {
-        let mut text = String::new();
-        for diag in &compilation.diags {
-            text.push_str(&render::plain(diag, &compilation));
-        }
-        return Err(Failure::Input(format!(
-            "`{}` does not compile:\n{}",
-            path.display(),
-            text.trim_end()
-        )));
-    };
-    let skill = match name {
-        Some(name) => program.skill(name).cloned().ok_or_else(|| {
-            let names: Vec<&str> = program.skills.iter().map(|s| s.name.as_str()).collect();
-            Failure::Usage(format!(
-                "`{}` has no skill `{name}`; it has {}",
-                path.display(),
-                names.join(", ")
-            ))
-        })?,
-        None => match program.skills.as_slice() {
-            [only] => only.clone(),
-            [] => return Err(Failure::Usage(format!("`{}` defines no skill", path.display()))),
-            many => {
-                let names: Vec<&str> = many.iter().map(|s| s.name.as_str()).collect();
-                return Err(Failure::Usage(format!(
-                    "`{}` defines {} skills ({}); pick one with --skill",
-                    path.display(),
-                    many.len(),
-                    names.join(", ")
-                )));
-            }
-        },
-    };
-    Ok((program, skill))
-}
-
-/// Learns a skill from a demonstration file; the library form of `skillc learn`.
-pub fn learn_from_files(skill: &skill_ir::Skill, demo_path: &Path, options: &LearnOptions) -> Result<Learned, Failure> {
-    learn_from_file(skill, demo_path, options, false)
-}
-
-/// Like [`learn_from_files`], optionally negating the file's wrench first (`applied_force`).
-/// Warns when the forces look like the force the robot applies and were not negated.
-pub fn learn_from_file(
-    skill: &skill_ir::Skill,
-    demo_path: &Path,
-    options: &LearnOptions,
-    applied_force: bool,
-) -> Result<Learned, Failure> {
-    let min_samples = (skill.learn.segments as usize * 5).max(10);
-    let mut loaded =
-        read_csv(demo_path, &ReadOptions { min_samples }).map_err(|err| Failure::Input(error_chain(&err)))?;
-    let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
-    if applied_force {
-        crate::eval::real::negate_wrench(&mut loaded.demo);
-    } else if crate::eval::real::stores_applied_force(&loaded.demo) {
-        warnings.push(
-            "in contact the force points into the surface: if the file stores the force the robot applies, pass --applied-force"
-                .to_string(),
-        );
-    }
-    learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| Failure::Input(error_chain(&err)))
-}
-
-/// An error and its sources on one line: `a: b: c`.
-pub fn error_chain(err: &dyn std::error::Error) -> String {
-    let mut text = err.to_string();
-    let mut source = err.source();
-    while let Some(inner) = source {
-        let _ = write!(text, ": {inner}");
-        source = inner.source();
-    }
-    text
-}
-
 /// Runs `skillc learn`.
 pub fn run(args: &LearnArgs) -> u8 {
     match learn(args) {
@@ -168,18 +66,16 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
     if let Some(dir) = &args.plot {
         std::fs::create_dir_all(dir)
             .map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
-        let view = crate::eval::SkillView {
+        let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
+        let subject = Subject {
             name: &learned.skill,
-            learned: Some(&learned),
-            skill: Some(&skill),
-            error: None,
-            demo: args.demo.clone(),
-            criteria: crate::eval::Criteria::default(),
+            demo: &args.demo,
+            bound: Some(&bound),
         };
-        for kind in ["trajectory", "learned_force"] {
-            let path = dir.join(format!("{}_{kind}.svg", learned.skill));
-            crate::eval::plot::draw(kind, &path, &view, &[])
-                .map_err(|err| Failure::Usage(format!("cannot plot `{kind}`: {err}")))?;
+        for kind in [Plot::Trajectory, Plot::LearnedForce] {
+            let path = dir.join(format!("{}_{}.svg", learned.skill, kind.name()));
+            plot::draw(kind, &path, &subject, &[])
+                .map_err(|err| Failure::Usage(format!("cannot plot `{}`: {err}", kind.name())))?;
             let _ = writeln!(out, "wrote `{}`", path.display());
         }
     }
@@ -317,7 +213,7 @@ pub fn rollout(args: &RolloutArgs) -> u8 {
         if !(args.dt > 0.0 && args.dt.is_finite()) {
             return Err(Failure::Usage("--dt must be a positive number of seconds".into()));
         }
-        let learned = crate::run_cmd::read_learned(&args.learned)?;
+        let learned = read_learned(&args.learned)?;
         let offset = match args.goal_offset.as_deref() {
             Some([dx, dy, dz]) => nalgebra::Vector3::new(*dx, *dy, *dz),
             Some(_) => return Err(Failure::Usage("--goal-offset takes three numbers: DX,DY,DZ".into())),

@@ -1,6 +1,7 @@
-//! SVG plots of an eval, after the thesis's Fig. 5.9, 5.11, 5.14 and 5.17: tool paths in two
-//! projections with the compliant frames, force along the compliant z, world-frame forces, and a
-//! state timeline per trial.
+//! SVG plots of a skill and its trials, after the thesis's Fig. 5.9, 5.11, 5.14 and 5.17: tool
+//! paths in two projections with the compliant frames, force along the compliant z, world-frame
+//! forces, a state timeline per trial, and what was learned of the force. A leaf: `skillc learn`,
+//! `skillc run` and `skillc eval` hand it a [`Subject`] and its [`Trial`]s.
 
 use std::path::Path;
 
@@ -8,10 +9,80 @@ use nalgebra::{Isometry3, Vector3};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use skill_runtime::demo::{read_csv, ReadOptions};
-use skill_runtime::exec::RunLog;
+use skill_runtime::exec::{BoundSkill, RunLog};
 use skill_runtime::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
+use skill_runtime::skill::Learned;
 
-use super::{Outcome, SkillView};
+use crate::profile::DesiredProfile;
+
+/// A kind of plot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plot {
+    /// Tool paths in two projections: the demonstration by segment, the learned rollout, every
+    /// trial, the learned frames' z axes.
+    Trajectory,
+    /// Applied force along the compliant z during each trial, with the desired force.
+    Force,
+    /// Applied force in the world frame: the demonstration and the first skill trial.
+    WorldForce,
+    /// The states over time, one row per trial.
+    Timeline,
+    /// The demonstration's force along each learned frame's z, with the learned forces.
+    LearnedForce,
+}
+
+impl Plot {
+    /// The plot's name in file names and messages (`trajectory`, `world_force`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Plot::Trajectory => "trajectory",
+            Plot::Force => "force",
+            Plot::WorldForce => "world_force",
+            Plot::Timeline => "timeline",
+            Plot::LearnedForce => "learned_force",
+        }
+    }
+}
+
+/// The skill a plot is about.
+#[derive(Debug, Clone, Copy)]
+pub struct Subject<'a> {
+    /// The skill's name.
+    pub name: &'a str,
+    /// The demonstration it was learned from.
+    pub demo: &'a Path,
+    /// The skill bound to what was learned, if learning worked.
+    pub bound: Option<&'a BoundSkill<'a>>,
+}
+
+impl<'a> Subject<'a> {
+    fn learned(&self) -> Option<&'a Learned> {
+        self.bound.map(|bound| bound.learned)
+    }
+}
+
+/// One trial drawn.
+#[derive(Debug, Clone, Copy)]
+pub struct Trial<'a> {
+    /// The scene variant's name.
+    pub variant: &'a str,
+    /// The replay baseline rather than the skill.
+    pub replay: bool,
+    /// The trial could not run (its log is empty).
+    pub error: bool,
+    /// Its ticks.
+    pub log: &'a RunLog,
+}
+
+impl Trial<'_> {
+    fn mode(&self) -> &'static str {
+        if self.replay {
+            "replay"
+        } else {
+            "skill"
+        }
+    }
+}
 
 const SEGMENT_COLOURS: [RGBColor; 4] = [
     RGBColor(31, 119, 180),
@@ -47,16 +118,15 @@ fn flange_to_tool() -> Isometry3<f64> {
     }
 }
 
-/// Draws one kind of plot for a skill into `path`: `trajectory`, `force`, `world_force`,
-/// `timeline` (these take the trials' outcomes) or `learned_force` (the demonstration only).
-pub fn draw(kind: &str, path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> Result<(), String> {
+/// Draws one kind of plot for a skill into `path` (SVG). [`Plot::LearnedForce`] draws the
+/// demonstration and what was learned only; the others also draw `runs`.
+pub fn draw(kind: Plot, path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> Result<(), String> {
     match kind {
-        "trajectory" => trajectory(path, skill, runs),
-        "force" => force(path, skill, runs),
-        "world_force" => world_force(path, skill, runs),
-        "timeline" => timeline(path, runs),
-        "learned_force" => learned_force(path, skill),
-        other => return Err(format!("unknown plot `{other}`")),
+        Plot::Trajectory => trajectory(path, skill, runs),
+        Plot::Force => force(path, skill, runs),
+        Plot::WorldForce => world_force(path, skill, runs),
+        Plot::Timeline => timeline(path, runs),
+        Plot::LearnedForce => learned_force(path, skill),
     }
     .map_err(|err| err.to_string())
 }
@@ -116,9 +186,9 @@ fn bounds(points: impl Iterator<Item = (f64, f64)>) -> ((f64, f64), (f64, f64)) 
     (pad(x), pad(y))
 }
 
-fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
+fn trajectory(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
     let offset = flange_to_tool();
-    let demo = read_demo(&skill.demo)?;
+    let demo = read_demo(skill.demo)?;
     let tool_of = |p: &Vector3<f64>, q: &nalgebra::UnitQuaternion<f64>| p + q * offset.translation.vector;
     let demo_tool: Vec<Vector3<f64>> = demo
         .position_m
@@ -127,7 +197,7 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
         .map(|(p, q)| tool_of(p, q))
         .collect();
     let segment_of = |k: usize| {
-        skill.learned.map_or(0, |l| {
+        skill.learned().map_or(0, |l| {
             l.segments
                 .iter()
                 .position(|s| k >= s.start_index && k < s.end_index)
@@ -135,7 +205,7 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
         })
     };
     let preview: Vec<Vector3<f64>> = skill
-        .learned
+        .learned()
         .map(|l| skill_runtime::skill::rollout::preview(l, 0.01, Vector3::zeros()).0)
         .unwrap_or_default()
         .iter()
@@ -144,14 +214,14 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
     let run_paths: Vec<(String, bool, Vec<Vector3<f64>>)> = runs
         .iter()
         .map(|o| {
-            let points = ticks(&o.log, 20)
+            let points = ticks(o.log, 20)
                 .map(|t| Vector3::new(t.measured[0], t.measured[1], t.measured[2]))
                 .collect();
-            (o.result.variant.clone(), o.result.mode == "replay", points)
+            (o.variant.to_string(), o.replay, points)
         })
         .collect();
     let frames: Vec<(Vector3<f64>, Vector3<f64>)> = skill
-        .learned
+        .learned()
         .map(|l| {
             let mut arrows = Vec::new();
             for frame in l.frames.values() {
@@ -203,7 +273,7 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
             .y_desc(["x", "y", "z"][pick.1].to_string() + " [m]")
             .draw()?;
         // The demonstration, coloured by segment.
-        let n_segments = skill.learned.map_or(1, |l| l.segments.len().max(1));
+        let n_segments = skill.learned().map_or(1, |l| l.segments.len().max(1));
         for segment in 0..n_segments {
             let points: Vec<(f64, f64)> = demo_tool
                 .iter()
@@ -262,9 +332,9 @@ fn trajectory(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResu
     Ok(())
 }
 
-fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
+fn force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
     let replay_z = skill
-        .learned
+        .learned()
         .and_then(|l| l.frames.values().next())
         .map_or(Vector3::z(), |f| f.at(0.0).rotation * Vector3::z());
     // Per trial: variant, replay or not, measured and desired force over time.
@@ -272,11 +342,11 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
     let series: Vec<Series> = runs
         .iter()
         .map(|o| {
-            let t0 = start_time(&o.log);
-            let replay = o.result.mode == "replay";
+            let t0 = start_time(o.log);
+            let replay = o.replay;
             let mut measured = Vec::new();
             let mut desired = Vec::new();
-            for tick in ticks(&o.log, 10) {
+            for tick in ticks(o.log, 10) {
                 let t = tick.t_s - t0;
                 let value = if replay {
                     Vector3::new(tick.wrench_base[0], tick.wrench_base[1], tick.wrench_base[2]).dot(&replay_z)
@@ -288,7 +358,7 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
                     desired.push((t, tick.desired_cf[2]));
                 }
             }
-            (o.result.variant.clone(), replay, measured, desired)
+            (o.variant.to_string(), replay, measured, desired)
         })
         .collect();
     let ((x0, x1), (mut y0, mut y1)) = bounds(series.iter().flat_map(|(_, _, m, d)| m.iter().chain(d.iter()).copied()));
@@ -353,21 +423,19 @@ fn force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
 
 /// The demonstration's applied force along each learned frame's z, with the learned desired
 /// forces over their segments (thesis Fig. 4.7, 5.9c).
-fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
-    let demo = read_demo(&skill.demo)?;
-    let (Some(learned), Some(ir)) = (skill.learned, skill.skill) else {
+fn learned_force(path: &Path, skill: &Subject<'_>) -> DrawResult {
+    let demo = read_demo(skill.demo)?;
+    let Some(bound) = skill.bound else {
         return Err("nothing learned to plot".into());
     };
+    let learned = bound.learned;
     let t0 = demo.t_s.first().copied().unwrap_or(0.0);
     let root = SVGBackend::new(path, (1300, 520)).into_drawing_area();
     root.fill(&WHITE)?;
     // Label, colour, points, drawn thick.
     type Line = (String, RGBColor, Vec<(f64, f64)>, bool);
     let mut lines: Vec<Line> = Vec::new();
-    for (index, decl) in ir.learn.frames.iter().enumerate() {
-        let Some(frame) = learned.frames.get(&decl.name) else {
-            continue;
-        };
+    for (index, (decl, frame)) in bound.declared_frames().enumerate() {
         let segment_start = match &decl.source {
             skill_ir::FrameSource::ForceAlignedSamples { segment } => {
                 learned.segments.get(segment.index()).map_or(0.0, |s| s.start_s)
@@ -388,10 +456,7 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
             false,
         ));
     }
-    for decl in &ir.learn.forces {
-        let Some(force) = learned.forces.get(&decl.name) else {
-            continue;
-        };
+    for (decl, force) in bound.declared_forces() {
         let segment = match &decl.source {
             skill_ir::ForceSource::Constant { segment, .. }
             | skill_ir::ForceSource::Dmp { segment, .. }
@@ -402,7 +467,7 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
             continue;
         };
         let duration = segment.end_s - segment.start_s;
-        let profile = super::metrics::DesiredProfile::new(force, duration / 200.0);
+        let profile = DesiredProfile::new(force, duration / 200.0);
         let points = (0..=200)
             .map(|k| {
                 let t = duration * k as f64 / 200.0;
@@ -447,8 +512,8 @@ fn learned_force(path: &Path, skill: &SkillView<'_>) -> DrawResult {
     Ok(())
 }
 
-fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawResult {
-    let demo = read_demo(&skill.demo)?;
+fn world_force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
+    let demo = read_demo(skill.demo)?;
     let t_demo0 = demo.t_s.first().copied().unwrap_or(0.0);
     let demo_series: Vec<Vec<(f64, f64)>> = (0..3)
         .map(|axis| {
@@ -460,12 +525,12 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
                 .collect()
         })
         .collect();
-    let trial = runs.iter().find(|o| o.result.mode == "skill" && !o.result.error);
+    let trial = runs.iter().find(|o| !o.replay && !o.error);
     let trial_series: Vec<Vec<(f64, f64)>> = match trial {
         Some(o) => {
-            let t0 = start_time(&o.log);
+            let t0 = start_time(o.log);
             (0..3)
-                .map(|axis| ticks(&o.log, 10).map(|t| (t.t_s - t0, t.wrench_base[axis])).collect())
+                .map(|axis| ticks(o.log, 10).map(|t| (t.t_s - t0, t.wrench_base[axis])).collect())
                 .collect()
         }
         None => vec![Vec::new(); 3],
@@ -473,7 +538,7 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
     let root = SVGBackend::new(path, (1300, 700)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((2, 1));
-    let trial_name = trial.map_or("no trial".to_string(), |o| o.result.variant.clone());
+    let trial_name = trial.map_or("no trial".to_string(), |o| o.variant.to_string());
     for (panel, (title, data)) in panels.iter().zip([
         (
             format!("{} — demonstration, applied force (world frame)", skill.name),
@@ -508,7 +573,7 @@ fn world_force(path: &Path, skill: &SkillView<'_>, runs: &[&Outcome]) -> DrawRes
     Ok(())
 }
 
-fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
+fn timeline(path: &Path, runs: &[Trial<'_>]) -> DrawResult {
     let rows = runs.len().max(1);
     let root = SVGBackend::new(path, (1300, 60 + 56 * rows as u32)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -529,7 +594,7 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
         .draw()?;
     let mut names: Vec<String> = Vec::new();
     for (row, outcome) in runs.iter().enumerate() {
-        let log = &outcome.log;
+        let log = outcome.log;
         let mut start = 0usize;
         while start < log.ticks.len() {
             let state = log.ticks[start].state;
@@ -563,7 +628,7 @@ fn timeline(path: &Path, runs: &[&Outcome]) -> DrawResult {
     }
     // Trial names above their bars (text hangs down from its anchor).
     for (row, outcome) in runs.iter().enumerate() {
-        let label = format!("{} ({})", outcome.result.variant, outcome.result.mode);
+        let label = format!("{} ({})", outcome.variant, outcome.mode());
         chart.draw_series(std::iter::once(Text::new(
             label,
             (0.02, row as f64 + 0.44),

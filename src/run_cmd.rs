@@ -3,12 +3,12 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog, RunReport};
-use skill_runtime::sim::Scene;
+use skill_runtime::exec::{bind, simulate, simulate_task, BoundSkill, ExecOptions, Mode, RunLog, RunReport, TaskStep};
 use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::atomic;
-use crate::learn_cmd::{error_chain, learn_from_files, load_skill, Failure};
+use crate::load::{error_chain, learn_from_files, load_scene, load_skill, read_learned, Failure};
+use crate::plot::{self, Plot, Subject, Trial};
 
 /// Arguments of `skillc run`.
 #[derive(Debug, Clone, clap::Args)]
@@ -49,36 +49,6 @@ pub struct RunArgs {
     /// Multiply the motion speed.
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
-}
-
-/// Loads a scene and applies `KEY=VALUE` overrides.
-pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
-    let mut scene = Scene::from_file(path).map_err(|err| Failure::Input(error_chain(&err)))?;
-    for set in sets {
-        let Some((key, value)) = set.split_once('=') else {
-            return Err(Failure::Usage(format!(
-                "`--set {set}` must look like KEY=VALUE, e.g. table.z=0.195"
-            )));
-        };
-        scene
-            .set(key.trim(), value.trim())
-            .map_err(|err| Failure::Input(error_chain(&err)))?;
-    }
-    Ok(scene)
-}
-
-/// Reads a learned file.
-pub fn read_learned(path: &Path) -> Result<Learned, Failure> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
-    serde_json::from_str(&text).map_err(|err| {
-        Failure::Input(format!(
-            "`{}` is not a learned file: {err} (line {}, column {})",
-            path.display(),
-            err.line(),
-            err.column()
-        ))
-    })
 }
 
 /// Runs `skillc run`.
@@ -150,55 +120,37 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), log.ticks.len());
     }
     if let (Some(dir), Some(demo)) = (&args.plot, &args.demo) {
-        plot_run(dir, demo, &skill, &learned, args.replay, &report, log, &mut text)?;
+        plot_run(dir, demo, &bound, args.replay, &log, &mut text)?;
     }
     Ok((report, text))
 }
 
 /// Draws the eval's plots for one run.
-#[allow(clippy::too_many_arguments)] // One call site; the pieces of a finished run.
 fn plot_run(
     dir: &Path,
     demo: &Path,
-    skill: &skill_ir::Skill,
-    learned: &Learned,
+    bound: &BoundSkill<'_>,
     replay: bool,
-    report: &RunReport,
-    log: RunLog,
+    log: &RunLog,
     text: &mut String,
 ) -> Result<(), Failure> {
     std::fs::create_dir_all(dir).map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
-    let view = crate::eval::SkillView {
-        name: &skill.name,
-        learned: Some(learned),
-        skill: Some(skill),
-        error: None,
-        demo: demo.to_path_buf(),
-        criteria: crate::eval::Criteria::default(),
+    let name = &bound.skill.name;
+    let subject = Subject {
+        name,
+        demo,
+        bound: Some(bound),
     };
-    let outcome = crate::eval::Outcome {
-        result: crate::eval::TrialResult {
-            skill: skill.name.clone(),
-            variant: "this run".to_string(),
-            mode: if replay { "replay" } else { "skill" }.to_string(),
-            success: report.outcome == skill_ir::Outcome::Success,
-            force_rms_rel: None,
-            contact_share: None,
-            peak_force_n: 0.0,
-            stop_force_n: None,
-            learned_force_n: None,
-            goal_error_m: 0.0,
-            duration_s: report.duration_s,
-            message: report.message.clone(),
-            error: false,
-            states: Vec::new(),
-        },
+    let trial = Trial {
+        variant: "this run",
+        replay,
+        error: false,
         log,
     };
-    for kind in ["trajectory", "force", "world_force", "timeline"] {
-        let path = dir.join(format!("{}_{kind}.svg", skill.name));
-        crate::eval::plot::draw(kind, &path, &view, &[&outcome])
-            .map_err(|err| Failure::Usage(format!("cannot plot `{kind}`: {err}")))?;
+    for kind in [Plot::Trajectory, Plot::Force, Plot::WorldForce, Plot::Timeline] {
+        let path = dir.join(format!("{name}_{}.svg", kind.name()));
+        plot::draw(kind, &path, &subject, &[trial])
+            .map_err(|err| Failure::Usage(format!("cannot plot `{}`: {err}", kind.name())))?;
         let _ = writeln!(text, "wrote `{}`", path.display());
     }
     Ok(())
@@ -247,13 +199,14 @@ pub fn state_stats(log: &RunLog) -> Vec<StateStats> {
 
 /// The human summary of a run.
 pub fn summary(skill: &str, replay: bool, report: &RunReport, log: &RunLog) -> String {
+    let heading = format!("{} `{skill}`", if replay { "replay of" } else { "skill" });
+    summary_under(&heading, report, log)
+}
+
+/// The human summary of a run under `heading` (what ran).
+fn summary_under(heading: &str, report: &RunReport, log: &RunLog) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "{} `{skill}`: {:.2} s simulated",
-        if replay { "replay of" } else { "skill" },
-        report.duration_s
-    );
+    let _ = writeln!(out, "{heading}: {:.2} s simulated", report.duration_s);
     let stats = state_stats(log);
     let _ = writeln!(
         out,
@@ -301,13 +254,13 @@ fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(s
 fn bind_all<'b, 'a>(
     steps: &'b [skill_ir::Step],
     prepared: &'a [(skill_ir::Skill, Learned)],
-) -> Result<Vec<skill_runtime::exec::TaskStep<'b, 'a>>, Failure> {
+) -> Result<Vec<TaskStep<'b, 'a>>, Failure> {
     steps
         .iter()
         .zip(prepared)
         .map(|(step, (skill, learned))| {
             bind(skill, learned)
-                .map(|bound| skill_runtime::exec::TaskStep { step, bound })
+                .map(|bound| TaskStep { step, bound })
                 .map_err(|err| Failure::Input(format!("step `{}`: {err}", step.name)))
         })
         .collect()
@@ -318,7 +271,6 @@ fn run_task(
     program: &skill_ir::Program,
     task: &skill_ir::Task,
 ) -> Result<(RunReport, String), Failure> {
-    use skill_runtime::exec::simulate_task;
     let scene = load_scene(&args.scene, &args.sets)?;
     let prepared: Vec<(skill_ir::Skill, Learned)> = task
         .steps
@@ -332,49 +284,33 @@ fn run_task(
         .collect::<Result<_, _>>()?;
     let steps = bind_all(&task.steps, &prepared)?;
     let fallbacks = bind_all(&task.fallbacks, &prepared_fallbacks)?;
-    let (reports, log, outcome) = simulate_task(&scene, &steps, &fallbacks, &ExecOptions::default())
+    let run = simulate_task(&scene, &steps, &fallbacks, &ExecOptions::default())
         .map_err(|err| Failure::Input(error_chain(&err)))?;
     if let Some(path) = &args.output {
-        atomic::write(path, log.to_csv().as_bytes())
+        atomic::write(path, run.to_csv().as_bytes())
             .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
     }
     let mut text = String::new();
-    let _ = writeln!(text, "task `{}`: {} step(s)", task.name, reports.len());
-    for step in &reports {
-        let mut step_log = RunLog::default();
-        // Per-step statistics come from the step's own slice of the task log.
-        let prefix = format!("{}/", step.step);
-        for tick in &log.ticks {
-            let name = &log.states[tick.state as usize];
-            if let Some(state) = name.strip_prefix(&prefix) {
-                let mut tick = tick.clone();
-                tick.state = step_log.state_index(state);
-                step_log.ticks.push(tick);
-            }
-        }
+    let _ = writeln!(text, "task `{}`: {} step(s)", task.name, run.steps.len());
+    for step in &run.steps {
         let title = format!(
             "{}step `{}` ({})",
             if step.fallback { "fallback " } else { "" },
             step.step,
             step.skill
         );
-        let _ = write!(
-            text,
-            "{}",
-            summary(&title, false, &step.report, &step_log)
-                .replacen("skill `", "", 1)
-                .replacen(&format!("{}`", title), &title, 1)
-        );
+        text.push_str(&summary_under(&title, &step.report, &step.log));
     }
+    let outcome = run.outcome;
     let status = match outcome {
         skill_ir::Outcome::Success => "task succeeded",
         skill_ir::Outcome::Failure => "TASK FAILED",
     };
     let _ = writeln!(text, "{status}");
     if let Some(path) = &args.output {
-        let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), log.ticks.len());
+        let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), run.ticks());
     }
-    let last = reports.last().map(|r| r.report.clone()).unwrap_or(RunReport {
+    let last = run.steps.last().map(|r| r.report.clone()).unwrap_or(RunReport {
         outcome,
         terminal: None,
         message: String::new(),

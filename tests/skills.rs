@@ -15,10 +15,10 @@ fn root() -> PathBuf {
 fn learned(skill: &str) -> (skill_ir::Skill, Learned) {
     let file = root().join(format!("stdlib-skills/{skill}.skill"));
     let demo = root().join(format!("examples/demos/{skill}.csv"));
-    let Ok((_, ir)) = skillc::learn_cmd::load_skill(&file, None) else {
+    let Ok((_, ir)) = skillc::load::load_skill(&file, None) else {
         panic!("{skill} compiles")
     };
-    let Ok(learned) = skillc::learn_cmd::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
         panic!("{skill} learns from its demonstration")
     };
     (ir, learned)
@@ -32,7 +32,7 @@ fn run(
     replay: bool,
 ) -> (RunReport, RunLog, Metrics) {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let Ok(scene) = skillc::run_cmd::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
+    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
         panic!("scene loads")
     };
     let bound = bind(skill, learned).expect("binds");
@@ -42,7 +42,7 @@ fn run(
         Mode::Skill(&bound)
     };
     let (report, log) = simulate(&scene, mode, &ExecOptions::default()).expect("runs");
-    let plan = ContactPlan::of(skill, learned);
+    let plan = ContactPlan::of(&bound);
     let frame_z = |t: f64| {
         learned
             .frames

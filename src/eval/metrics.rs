@@ -1,12 +1,14 @@
-//! The metrics of one trial (SPEC §9): force tracking in the compliant frame during contact,
+//! The metrics of one trial (docs/method.md §8): force tracking in the compliant frame during contact,
 //! the share of the contact phase in contact, the peak force, the stop force of a touch, the
 //! position error at the goal.
 
 use nalgebra::Vector3;
 use serde::Serialize;
 use skill_ir as ir;
-use skill_runtime::exec::{RunLog, Tick};
-use skill_runtime::skill::{Learned, LearnedForce};
+use skill_runtime::exec::{BoundSkill, RunLog, Tick};
+use skill_runtime::skill::LearnedForce;
+
+use crate::profile::DesiredProfile;
 
 /// Ticks after the start of a contact visit that are not judged (settling) \[s\].
 pub const SETTLE_S: f64 = 0.2;
@@ -45,8 +47,9 @@ pub struct ContactPlan {
 }
 
 impl ContactPlan {
-    /// The contact phase of `skill`: its first force-controlled state with a desired force.
-    pub fn of(skill: &ir::Skill, learned: &Learned) -> ContactPlan {
+    /// The contact phase of a bound skill: its first force-controlled state with a desired force.
+    pub fn of(bound: &BoundSkill<'_>) -> ContactPlan {
+        let skill = bound.skill;
         let mut plan = ContactPlan {
             skill_states: Vec::new(),
             replay_states: Vec::new(),
@@ -70,7 +73,7 @@ impl ContactPlan {
             if plan.force.is_some() {
                 continue;
             }
-            plan.force = learned.forces.get(&decl.name).cloned();
+            plan.force = Some(bound.force(force_id).clone());
             plan.frame = Some(active.frame);
             plan.relative_to_peak = matches!(decl.source, ir::ForceSource::Dmp { .. });
             let segment = match &decl.source {
@@ -84,60 +87,10 @@ impl ContactPlan {
                 _ => None,
             };
             if let Some(segment) = segment {
-                let motion = learned
-                    .motions
-                    .iter()
-                    .find(|(_, m)| m.segment == segment)
-                    .map(|(name, _)| name.clone());
-                plan.replay_states.push(match motion {
-                    Some(name) => format!("replay:{name}"),
-                    None => format!("replay:segment {}", segment + 1),
-                });
+                plan.replay_states.push(bound.replay_state(segment));
             }
         }
         plan
-    }
-}
-
-/// A learned force's desired value \[N\] every `period_s`, from the start of its phase until it
-/// settles (magnitude along z; for a force vector, its magnitude), from one rollout. Past the end
-/// the last value holds: see [`DesiredProfile::at`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct DesiredProfile {
-    period_s: f64,
-    values: Vec<f64>,
-}
-
-impl DesiredProfile {
-    /// Samples `force`.
-    pub fn new(force: &LearnedForce, period_s: f64) -> Self {
-        let values = match force {
-            LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } => {
-                let mut rollout = dmp.rollout();
-                let steps = (dmp.tau_s * 1.5 / period_s).ceil() as usize;
-                let mut values = Vec::with_capacity(steps + 1);
-                for step in 0..=steps {
-                    if step > 0 {
-                        rollout.step(dmp, period_s);
-                    }
-                    values.push(rollout.position().iter().map(|v| v * v).sum::<f64>().sqrt());
-                }
-                values
-            }
-            other => vec![other.value_n().unwrap_or(0.0)],
-        };
-        DesiredProfile { period_s, values }
-    }
-
-    /// The desired force `t` seconds into the phase.
-    pub fn at(&self, t: f64) -> f64 {
-        let index = ((t / self.period_s).max(0.0) as usize).min(self.values.len() - 1);
-        self.values[index]
-    }
-
-    /// The largest desired force.
-    pub fn peak(&self) -> f64 {
-        self.values.iter().copied().fold(0.0, f64::max)
     }
 }
 

@@ -3,7 +3,6 @@
 //! the replay baseline; trials run in parallel and the results are the same for any thread count.
 
 pub mod metrics;
-pub mod plot;
 pub mod real;
 mod report;
 
@@ -12,11 +11,12 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog};
+use skill_runtime::exec::{bind, simulate, BoundSkill, ExecOptions, Mode, RunLog};
 use skill_runtime::skill::{LearnOptions, Learned};
 
-use crate::learn_cmd::{error_chain, learn_from_files, load_skill, Failure};
-use crate::run_cmd::load_scene;
+use crate::load::{error_chain, learn_from_files, load_scene, load_skill, Failure};
+use crate::plot;
+use crate::profile::DesiredProfile;
 use metrics::{ContactPlan, Metrics};
 
 /// The default trials, shipped as `examples/eval/default.toml`.
@@ -105,7 +105,7 @@ pub struct Variant {
 /// One trial's result (an entry of `summary.json`'s `trials`).
 #[derive(Debug, Clone, Serialize)]
 pub struct TrialResult {
-    /// The skill.
+    /// The skill's name.
     pub skill: String,
     /// The variant.
     pub variant: String,
@@ -135,10 +135,10 @@ pub struct TrialResult {
     pub states: Vec<String>,
 }
 
-/// A learned skill ready for trials, or why it is not.
+/// A learned skill ready for trials (it binds), or why it is not.
 struct Prepared {
     name: String,
-    program_skill: Result<(skill_ir::Skill, Learned, ContactPlan), String>,
+    program_skill: Result<(skill_ir::Skill, Learned), String>,
     spec: SkillTrials,
     base_dir: PathBuf,
 }
@@ -156,6 +156,18 @@ pub struct Outcome {
     pub result: TrialResult,
     /// The tick log (empty when the trial failed to run).
     pub log: RunLog,
+}
+
+impl Outcome {
+    /// The trial as the plots draw it.
+    pub fn trial(&self) -> plot::Trial<'_> {
+        plot::Trial {
+            variant: &self.result.variant,
+            replay: self.result.mode == "replay",
+            error: self.result.error,
+            log: &self.log,
+        }
+    }
 }
 
 /// Runs `skillc eval`.
@@ -200,8 +212,8 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
     });
     let (name, program_skill) = match loaded {
         Ok((skill, learned)) => {
-            let plan = ContactPlan::of(&skill, &learned);
-            (skill.name.clone(), Ok((skill, learned, plan)))
+            let binds = bind(&skill, &learned).map(|_| ()).map_err(|err| err.to_string());
+            (skill.name.clone(), binds.map(|()| (skill, learned)))
         }
         Err(Failure::Input(message) | Failure::Usage(message)) => (fallback_name, Err(message)),
     };
@@ -213,7 +225,23 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
     }
 }
 
-fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
+/// A prepared skill bound to what it learned, with its contact phase; or why it cannot run.
+type Bound<'a> = Result<(BoundSkill<'a>, ContactPlan), String>;
+
+fn bind_prepared(prepared: &Prepared) -> Bound<'_> {
+    match &prepared.program_skill {
+        Ok((skill, learned)) => match bind(skill, learned) {
+            Ok(bound) => {
+                let plan = ContactPlan::of(&bound);
+                Ok((bound, plan))
+            }
+            Err(err) => Err(err.to_string()),
+        },
+        Err(message) => Err(message.clone()),
+    }
+}
+
+fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
     let variant = &prepared.spec.variants[job.variant];
     let mode_name = if job.replay { "replay" } else { "skill" };
     let failed = |message: String| Outcome {
@@ -235,7 +263,7 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
         },
         log: RunLog::default(),
     };
-    let (skill, learned, plan) = match &prepared.program_skill {
+    let (bound, plan) = match bound {
         Ok(parts) => parts,
         Err(message) => return failed(message.clone()),
     };
@@ -243,25 +271,18 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
         Ok(scene) => scene,
         Err(Failure::Input(message) | Failure::Usage(message)) => return failed(message),
     };
-    let bound = match bind(skill, learned) {
-        Ok(bound) => bound,
-        Err(err) => return failed(err.to_string()),
-    };
     let mode = if job.replay {
-        Mode::Replay(learned)
+        Mode::Replay(bound.learned)
     } else {
-        Mode::Skill(&bound)
+        Mode::Skill(bound)
     };
     let (report, log) = match simulate(&scene, mode, &ExecOptions::default()) {
         Ok(done) => done,
         Err(err) => return failed(error_chain(&err)),
     };
-    let frame_z = |t: f64| replay_frame_z(skill, learned, plan, t);
+    let frame_z = |t: f64| replay_frame_z(bound, plan, t);
     let metrics: Metrics = metrics::measure(&log, plan, job.replay, &frame_z);
-    let learned_force = plan
-        .force
-        .as_ref()
-        .map(|force| metrics::DesiredProfile::new(force, 0.01).peak());
+    let learned_force = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01).peak());
     let criteria = prepared.spec.criteria;
     let mut success = job.replay || report.outcome == skill_ir::Outcome::Success;
     if let Some(max) = criteria.force_rms_rel {
@@ -301,14 +322,9 @@ fn run_job(prepared: &Prepared, job: &Job) -> Outcome {
 }
 
 /// The compliant z of the contact state for replay ticks, `t` seconds into the contact phase.
-fn replay_frame_z(skill: &skill_ir::Skill, learned: &Learned, plan: &ContactPlan, t: f64) -> nalgebra::Vector3<f64> {
+fn replay_frame_z(bound: &BoundSkill<'_>, plan: &ContactPlan, t: f64) -> nalgebra::Vector3<f64> {
     match plan.frame {
-        Some(skill_ir::FrameRef::Learned(id)) => {
-            let name = &skill.learn.frames[id.index()].name;
-            learned.frames.get(name).map_or(nalgebra::Vector3::z(), |frame| {
-                frame.at(t).rotation * nalgebra::Vector3::z()
-            })
-        }
+        Some(skill_ir::FrameRef::Learned(id)) => bound.frame(id).at(t).rotation * nalgebra::Vector3::z(),
         _ => nalgebra::Vector3::z(),
     }
 }
@@ -350,6 +366,7 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     progress.set_message("learning");
     let prepared: Vec<Prepared> =
         pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
+    let bound: Vec<Bound<'_>> = prepared.iter().map(bind_prepared).collect();
     let mut jobs = Vec::new();
     for (skill, prep) in prepared.iter().enumerate() {
         for variant in 0..prep.spec.variants.len() {
@@ -372,7 +389,7 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let outcomes: Vec<Outcome> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let outcome = run_job(&prepared[job.skill], job);
+                let outcome = run_job(&prepared[job.skill], &bound[job.skill], job);
                 progress.inc(1);
                 outcome
             })
@@ -395,36 +412,52 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
         }
         None => Vec::new(),
     };
-    let written = report::write(&args.out, &prepared_views(&prepared), &outcomes, elapsed, &table, &real)
-        .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
+    let written = report::write(
+        &args.out,
+        &prepared_views(&prepared, &bound),
+        &outcomes,
+        elapsed,
+        &table,
+        &real,
+    )
+    .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
     println!("report: {}", written.display());
     let any_error = outcomes.iter().any(|o| o.result.error);
     Ok(u8::from(any_error))
 }
 
 /// What the report needs of each prepared skill.
-pub struct SkillView<'a> {
+struct SkillView<'a> {
     /// The skill's name.
-    pub name: &'a str,
-    /// The learned file, if learning worked.
-    pub learned: Option<&'a Learned>,
-    /// The IR.
-    pub skill: Option<&'a skill_ir::Skill>,
+    name: &'a str,
+    /// The skill bound to what it learned, if learning worked.
+    bound: Option<&'a BoundSkill<'a>>,
     /// Why learning failed.
-    pub error: Option<&'a str>,
+    error: Option<&'a str>,
     /// The demonstration path.
-    pub demo: PathBuf,
+    demo: PathBuf,
     /// Criteria.
-    pub criteria: Criteria,
+    criteria: Criteria,
 }
 
-fn prepared_views(prepared: &[Prepared]) -> Vec<SkillView<'_>> {
+impl SkillView<'_> {
+    /// The skill as the plots see it.
+    fn subject(&self) -> plot::Subject<'_> {
+        plot::Subject {
+            name: self.name,
+            demo: &self.demo,
+            bound: self.bound,
+        }
+    }
+}
+
+fn prepared_views<'a>(prepared: &'a [Prepared], bound: &'a [Bound<'a>]) -> Vec<SkillView<'a>> {
     prepared
         .iter()
-        .map(|p| SkillView {
+        .zip(bound)
+        .map(|(p, bound)| SkillView {
             name: &p.name,
-            learned: p.program_skill.as_ref().ok().map(|(_, learned, _)| learned),
-            skill: p.program_skill.as_ref().ok().map(|(skill, _, _)| skill),
+            bound: bound.as_ref().ok().map(|(bound, _)| bound),
             error: p.program_skill.as_ref().err().map(String::as_str),
             demo: p.base_dir.join(&p.spec.demo),
             criteria: p.spec.criteria,

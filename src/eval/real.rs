@@ -1,5 +1,5 @@
 //! `skillc eval --real DIR`: learn a slide skill from each usable real demonstration in a folder
-//! shaped like the LASA wiping data (`*.csv` with the SPEC columns, optional
+//! shaped like the LASA wiping data (`*.csv` with skillc's demonstration columns, optional
 //! `segment_labels.csv`), compare the segmentation with the authors' labels, and reproduce
 //! each on a table whose top is the learned plane.
 
@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use skill_runtime::demo::{read_csv, ReadOptions};
+use skill_runtime::demo::{negate_wrench, read_csv, stores_applied_force, ReadOptions};
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode};
 use skill_runtime::skill::{learn_skill, LearnOptions, LearnedForce, LearnedFrame};
 
 use super::metrics::{measure, ContactPlan};
-use crate::learn_cmd::error_chain;
+use crate::load::{error_chain, load_scene, Failure};
 
 /// What happened with one real demonstration.
 #[derive(Debug, Clone, Serialize)]
@@ -41,37 +41,6 @@ pub struct RealResult {
     pub contact_share: Option<f64>,
     /// Whether the file's forces were negated to skillc's convention.
     pub sign_flipped: bool,
-}
-
-/// Negates the demonstration's forces and torques (to or from the force the robot applies).
-pub fn negate_wrench(demo: &mut skill_runtime::demo::Demo) {
-    for (f, m) in demo.force_n.iter_mut().zip(demo.torque_nm.iter_mut()) {
-        *f = -*f;
-        *m = -*m;
-    }
-}
-
-/// Whether a demonstration stores the force the robot applies rather than the force on the
-/// tool (the LASA files do not document theirs): in contact, the force on the tool points away
-/// from the surface, back towards where the tool came from. The contact is taken where the
-/// force is largest, the way back as the direction to the first sample.
-pub fn stores_applied_force(demo: &skill_runtime::demo::Demo) -> bool {
-    let Some((peak, _)) = demo
-        .force_n
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
-    else {
-        return false;
-    };
-    let back = demo.position_m[0] - demo.position_m[peak];
-    let strong: Vec<&Vector3<f64>> = demo
-        .force_n
-        .iter()
-        .filter(|f| f.norm() > 0.5 * demo.force_n[peak].norm())
-        .collect();
-    let mean: Vector3<f64> = strong.iter().copied().sum::<Vector3<f64>>() / strong.len().max(1) as f64;
-    back.norm() > 0.01 && mean.dot(&back) < 0.0
 }
 
 /// A demonstration whose force does not change between most consecutive samples: the sensor
@@ -154,7 +123,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
     let mut demo = demo;
     if stores_applied_force(&demo) {
-        // skillc's convention is the force the environment exerts on the tool (SPEC §3).
+        // skillc's convention is the force the environment exerts on the tool (docs/method.md §1).
         negate_wrench(&mut demo);
         warnings.push("the force points into the surface: the file stores the force the robot applies; negated".into());
         result.sign_flipped = true;
@@ -207,9 +176,9 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         format!("table.rpy=[{roll}, {pitch}, {yaw}]"),
         "table.size=[0.8, 0.8, 0.05]".to_string(),
     ];
-    let scene = match crate::run_cmd::load_scene(table_scene, &sets) {
+    let scene = match load_scene(table_scene, &sets) {
         Ok(scene) => scene,
-        Err(crate::learn_cmd::Failure::Input(m) | crate::learn_cmd::Failure::Usage(m)) => {
+        Err(Failure::Input(m) | Failure::Usage(m)) => {
             result.reproduction = Some(format!("cannot build the table scene: {m}"));
             return result;
         }
@@ -223,7 +192,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     };
     match simulate(&scene, Mode::Skill(&bound), &ExecOptions::default()) {
         Ok((report, log)) => {
-            let plan = ContactPlan::of(skill, &learned);
+            let plan = ContactPlan::of(&bound);
             let metrics = measure(&log, &plan, false, &|_| z);
             result.force_rms_rel = metrics.force_rms_rel;
             result.contact_share = metrics.contact_share;
@@ -232,30 +201,4 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         Err(err) => result.reproduction = Some(error_chain(&err)),
     }
     result
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_force_convention_of_a_file_is_recognised() {
-        use skill_runtime::demogen::{generate, to_csv, StdSkill};
-        for skill in [StdSkill::Touch, StdSkill::Slide] {
-            let text = to_csv(&generate(skill, skill.default_seed()));
-            let demo = skill_runtime::demo::parse_csv("demo.csv", &text, &ReadOptions::default())
-                .expect("parses")
-                .demo;
-            assert!(
-                !stores_applied_force(&demo),
-                "{skill:?}: the generator stores the force on the tool"
-            );
-            let mut flipped = demo.clone();
-            flipped.force_n.iter_mut().for_each(|f| *f = -*f);
-            assert!(
-                stores_applied_force(&flipped),
-                "{skill:?}: negated forces are recognised"
-            );
-        }
-    }
 }

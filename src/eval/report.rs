@@ -4,8 +4,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::real::RealResult;
-use super::{plot, Outcome, SkillView};
+use super::{Outcome, SkillView};
 use crate::atomic;
+use crate::plot::{self, Plot};
 
 fn percent(value: Option<f64>) -> String {
     value.map_or("-".to_string(), |v| format!("{:.1}", v * 100.0))
@@ -88,7 +89,7 @@ pub(super) fn write(
             "name": s.name,
             "criteria": s.criteria,
             "error": s.error,
-            "segments": s.learned.map(|l| &l.segments),
+            "segments": s.bound.map(|b| &b.learned.segments),
         })).collect::<Vec<_>>(),
     });
     let json = serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)? + "\n";
@@ -143,15 +144,20 @@ pub(super) fn write(
             "<p>criteria: {}</p>",
             escape(&serde_json::to_string(&skill.criteria).unwrap_or_default())
         );
-        let runs: Vec<&Outcome> = outcomes.iter().filter(|o| o.result.skill == skill.name).collect();
-        for (kind, caption) in [
-            ("trajectory", "Tool path: demonstration (coloured by segment), learned rollout, every reproduction (solid: skill, dashed: replay), compliant-frame z axes as arrows."),
-            ("force", "Applied force along the compliant z during the trial (solid: skill, dashed: replay) and the learned desired force (black)."),
-            ("world_force", "Applied force in the world frame, demonstration and skill trial as demonstrated."),
-            ("timeline", "States over time, per trial."),
+        let runs: Vec<plot::Trial<'_>> = outcomes
+            .iter()
+            .filter(|o| o.result.skill == skill.name)
+            .map(Outcome::trial)
+            .collect();
+        for (plot, caption) in [
+            (Plot::Trajectory, "Tool path: demonstration (coloured by segment), learned rollout, every reproduction (solid: skill, dashed: replay), compliant-frame z axes as arrows."),
+            (Plot::Force, "Applied force along the compliant z during the trial (solid: skill, dashed: replay) and the learned desired force (black)."),
+            (Plot::WorldForce, "Applied force in the world frame, demonstration and skill trial as demonstrated."),
+            (Plot::Timeline, "States over time, per trial."),
         ] {
+            let kind = plot.name();
             let file = format!("{}_{kind}.svg", skill.name);
-            match plot::draw(kind, &out.join("plots").join(&file), skill, &runs) {
+            match plot::draw(plot, &out.join("plots").join(&file), &skill.subject(), &runs) {
                 Ok(()) => {
                     let _ = writeln!(html, "<figure><img src=\"plots/{file}\" alt=\"{kind}\"><figcaption>{caption}</figcaption></figure>");
                 }

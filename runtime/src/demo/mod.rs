@@ -12,10 +12,12 @@ mod csv;
 mod filter;
 mod quat;
 mod resample;
+mod sign;
 
 pub use self::csv::{parse_csv, read_csv, ReadOptions, COLUMNS};
 pub use self::filter::{low_pass, FilterOrder};
 pub use self::resample::resample;
+pub use self::sign::{negate_wrench, stores_applied_force};
 
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};

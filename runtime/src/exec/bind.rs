@@ -12,35 +12,35 @@ pub enum BindError {
     /// The file was learned for another skill.
     #[error("the learned file is for skill `{found}`, not `{expected}`")]
     WrongSkill {
-        /// The skill run.
+        /// The name of the skill being run.
         expected: String,
-        /// The skill in the file.
+        /// The name of the skill the file was learned for.
         found: String,
     },
     /// The skill changed since the file was learned.
     #[error("skill `{skill}` changed since it was learned (IR hash {found}, now {expected}); learn it again")]
     Stale {
-        /// The skill.
+        /// The skill's name.
         skill: String,
-        /// The hash now.
+        /// The IR hash of the skill as compiled now.
         expected: String,
-        /// The hash in the file.
+        /// The IR hash recorded in the learned file.
         found: String,
     },
     /// A feature the skill needs is missing from the file.
     #[error("the learned file lacks {kind} `{name}`")]
     Missing {
-        /// Frame, motion, force or threshold.
+        /// What is missing: `frame`, `motion`, `force` or `threshold`.
         kind: &'static str,
-        /// Its name.
+        /// The name the skill declares it under.
         name: String,
     },
     /// A learned file of a newer format.
     #[error("the learned file has format version {found}; this skillc reads version {supported}")]
     Version {
-        /// In the file.
+        /// The format version written in the file.
         found: u32,
-        /// What this build reads.
+        /// The newest format version this build reads.
         supported: u32,
     },
 }
@@ -119,4 +119,37 @@ pub fn bind<'a>(skill: &'a ir::Skill, learned: &'a Learned) -> Result<BoundSkill
             })
             .collect::<Result<_, _>>()?,
     })
+}
+
+impl<'a> BoundSkill<'a> {
+    /// The learned frame of a declared frame.
+    pub fn frame(&self, id: ir::FrameId) -> &'a LearnedFrame {
+        self.frames[id.index()]
+    }
+
+    /// The learned motion of a declared motion.
+    pub fn motion(&self, id: ir::MotionId) -> &'a LearnedMotion {
+        self.motions[id.index()]
+    }
+
+    /// The learned force of a declared force.
+    pub fn force(&self, id: ir::ForceId) -> &'a LearnedForce {
+        self.forces[id.index()]
+    }
+
+    /// The declared frames with what was learned for each.
+    pub fn declared_frames(&self) -> impl Iterator<Item = (&'a ir::FrameDecl, &'a LearnedFrame)> + '_ {
+        self.skill.learn.frames.iter().zip(self.frames.iter().copied())
+    }
+
+    /// The declared forces with what was learned for each.
+    pub fn declared_forces(&self) -> impl Iterator<Item = (&'a ir::ForceDecl, &'a LearnedForce)> + '_ {
+        self.skill.learn.forces.iter().zip(self.forces.iter().copied())
+    }
+
+    /// The name of the replay baseline's state covering `segment` (0-based); see
+    /// [`replay_state`](super::replay_state).
+    pub fn replay_state(&self, segment: usize) -> String {
+        super::replay_state(self.learned, segment)
+    }
 }

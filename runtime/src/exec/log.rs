@@ -50,17 +50,31 @@ impl RunLog {
 
     /// The log as CSV, one row per tick.
     pub fn to_csv(&self) -> String {
-        let dof = self.ticks.first().map_or(0, |t| t.torques.len());
-        let mut out = String::with_capacity(self.ticks.len() * 400);
-        out.push_str("t,state,xd,yd,zd,qwd,qxd,qyd,qzd,x,y,z,qw,qx,qy,qz,fx,fy,fz,mx,my,mz,");
-        out.push_str("cf_fx,cf_fy,cf_fz,cf_mx,cf_my,cf_mz,cf_fx_d,cf_fy_d,cf_fz_d,cf_mx_d,cf_my_d,cf_mz_d,");
-        out.push_str("cf_zx,cf_zy,cf_zz,sel_x,sel_y,sel_z,sel_rx,sel_ry,sel_rz");
-        for joint in 1..=dof {
-            let _ = write!(out, ",tau{joint}");
-        }
-        out.push('\n');
-        for tick in &self.ticks {
-            let _ = write!(out, "{:.4},{}", tick.t_s, self.states[tick.state as usize]);
+        csv(&[(None, self)])
+    }
+}
+
+/// Consecutive logs as one CSV (a task's steps on one robot): each row's state is written
+/// `<step>/<state>` for a log given with a step name.
+pub(super) fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
+    let first = logs.iter().find_map(|(_, log)| log.ticks.first());
+    let dof = first.map_or(0, |t| t.torques.len());
+    let rows: usize = logs.iter().map(|(_, log)| log.ticks.len()).sum();
+    let mut out = String::with_capacity(rows * 400);
+    out.push_str("t,state,xd,yd,zd,qwd,qxd,qyd,qzd,x,y,z,qw,qx,qy,qz,fx,fy,fz,mx,my,mz,");
+    out.push_str("cf_fx,cf_fy,cf_fz,cf_mx,cf_my,cf_mz,cf_fx_d,cf_fy_d,cf_fz_d,cf_mx_d,cf_my_d,cf_mz_d,");
+    out.push_str("cf_zx,cf_zy,cf_zz,sel_x,sel_y,sel_z,sel_rx,sel_ry,sel_rz");
+    for joint in 1..=dof {
+        let _ = write!(out, ",tau{joint}");
+    }
+    out.push('\n');
+    for (step, log) in logs {
+        for tick in &log.ticks {
+            let state = &log.states[tick.state as usize];
+            let _ = match step {
+                Some(step) => write!(out, "{:.4},{step}/{state}", tick.t_s),
+                None => write!(out, "{:.4},{state}", tick.t_s),
+            };
             for value in tick.desired.iter().chain(&tick.measured) {
                 let _ = write!(out, ",{value:.6}");
             }
@@ -78,6 +92,6 @@ impl RunLog {
             }
             out.push('\n');
         }
-        out
     }
+    out
 }

@@ -30,4 +30,4 @@ pub use bind::{bind, BindError, BoundSkill};
 pub use log::{RunLog, Tick};
 pub use rig::Rig;
 pub use run::{replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit};
-pub use session::{simulate, simulate_task, Mode, SessionError, StepReport, TaskStep};
+pub use session::{simulate, simulate_task, Mode, SessionError, StepReport, TaskRun, TaskStep};

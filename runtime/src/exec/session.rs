@@ -1,6 +1,7 @@
 //! One simulated run from files' worth of inputs: a scene, a bound skill (or a replay), options.
 //! Used by `skillc run` and `skillc eval`.
 
+use super::log::csv;
 use super::{run_replay, run_skill, BoundSkill, ExecError, ExecOptions, Rig, RunLog, RunReport};
 use crate::control::{ControllerGains, HybridController};
 use crate::plant::Plant;
@@ -74,6 +75,34 @@ pub struct StepReport {
     pub fallback: bool,
     /// How it ended.
     pub report: RunReport,
+    /// Its ticks, with its own state names (empty unless [`ExecOptions::log`]).
+    pub log: RunLog,
+}
+
+/// A task as it ran: its steps in order (a failed step's fallback after it) and the outcome.
+#[derive(Debug, Clone)]
+pub struct TaskRun {
+    /// The steps run.
+    pub steps: Vec<StepReport>,
+    /// Success when every step succeeded.
+    pub outcome: skill_ir::Outcome,
+}
+
+impl TaskRun {
+    /// Every tick of the task as CSV, one row per tick, each state written `<step>/<state>`.
+    pub fn to_csv(&self) -> String {
+        let logs: Vec<(Option<&str>, &RunLog)> = self
+            .steps
+            .iter()
+            .map(|step| (Some(step.step.as_str()), &step.log))
+            .collect();
+        csv(&logs)
+    }
+
+    /// Ticks over all steps.
+    pub fn ticks(&self) -> usize {
+        self.steps.iter().map(|step| step.log.ticks.len()).sum()
+    }
 }
 
 /// A task step ready to run: its IR step and its bound skill.
@@ -93,7 +122,7 @@ pub fn simulate_task(
     steps: &[TaskStep<'_, '_>],
     fallbacks: &[TaskStep<'_, '_>],
     options: &ExecOptions,
-) -> Result<(Vec<StepReport>, RunLog, skill_ir::Outcome), SessionError> {
+) -> Result<TaskRun, SessionError> {
     with_rig(scene, |rig| task_on(rig, steps, fallbacks, options))
 }
 
@@ -102,48 +131,42 @@ fn task_on(
     steps: &[TaskStep<'_, '_>],
     fallbacks: &[TaskStep<'_, '_>],
     options: &ExecOptions,
-) -> Result<(Vec<StepReport>, RunLog, skill_ir::Outcome), SessionError> {
-    let mut log = RunLog::default();
+) -> Result<TaskRun, SessionError> {
     let mut reports = Vec::new();
-    let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>, log: &mut RunLog| {
+    let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>| {
         let step_options = ExecOptions {
             overrides: task_step.step.overrides,
             prepose: first && options.prepose,
             ..options.clone()
         };
-        let mut step_log = RunLog::default();
-        let report = run_skill(
-            &task_step.bound,
-            rig,
-            &step_options,
-            options.log.then_some(&mut step_log),
-        )?;
-        for mut tick in step_log.ticks {
-            tick.state = log.state_index(&format!(
-                "{}/{}",
-                task_step.step.name, step_log.states[tick.state as usize]
-            ));
-            log.ticks.push(tick);
-        }
+        let mut log = RunLog::default();
+        let report = run_skill(&task_step.bound, rig, &step_options, options.log.then_some(&mut log))?;
         Ok::<_, ExecError>(StepReport {
             step: task_step.step.name.clone(),
             skill: task_step.step.skill.clone(),
             fallback,
             report,
+            log,
         })
     };
     for (index, task_step) in steps.iter().enumerate() {
-        let report = run_step(task_step, index == 0, false, rig, &mut log)?;
+        let report = run_step(task_step, index == 0, false, rig)?;
         let failed = report.report.outcome == skill_ir::Outcome::Failure;
         reports.push(report);
         if failed {
             if let skill_ir::OnFailure::Fallback(fallback) = task_step.step.on_failure {
                 if let Some(fallback) = fallbacks.get(fallback as usize) {
-                    reports.push(run_step(fallback, false, true, rig, &mut log)?);
+                    reports.push(run_step(fallback, false, true, rig)?);
                 }
             }
-            return Ok((reports, log, skill_ir::Outcome::Failure));
+            return Ok(TaskRun {
+                steps: reports,
+                outcome: skill_ir::Outcome::Failure,
+            });
         }
     }
-    Ok((reports, log, skill_ir::Outcome::Success))
+    Ok(TaskRun {
+        steps: reports,
+        outcome: skill_ir::Outcome::Success,
+    })
 }

@@ -47,7 +47,10 @@ fn malformed_urdfs_give_clear_errors() {
         ("012", "non-finite number in `joint j origin`"),
         ("013", "no movable joint"),
         ("014", "not a URDF"),
-        ("015", "is a xacro file (macros and `${...}` expressions), not a URDF: expand it to plain URDF first"),
+        (
+            "015",
+            "is a xacro file (macros and `${...}` expressions), not a URDF: expand it to plain URDF first",
+        ),
         ("016", "is an SDF file, not a URDF"),
         ("017", "is a MuJoCo MJCF file, not a URDF"),
     ];

@@ -17,7 +17,7 @@ pub const SETTLE_S: f64 = 0.2;
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Metrics {
     /// RMS of (desired − applied) along the compliant z during contact, over the learned force
-    /// (over its peak for force profiles); `None` when the skill has no contact phase.
+    /// (over its peak for a force-vector DMP such as press's profile, over its mean otherwise); `None` when the skill has no contact phase.
     pub force_rms_rel: Option<f64>,
     /// Share of the contact phase with the applied force above contact level.
     pub contact_share: Option<f64>,

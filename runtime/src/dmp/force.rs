@@ -1,7 +1,8 @@
 //! Force DMPs: the same 1-D transformation systems, on force channels.
 //!
-//! Forces follow the demonstration's sign convention (the force the environment exerts on the
-//! tool) unless the caller projects them first, e.g. onto a compliant frame's z axis.
+//! The channels carry whatever force the caller fits: the learning driver fits the force the
+//! robot applies (the negated sensor reading, docs/method.md §1), projected on the compliant
+//! frame where the template asks for it.
 
 use nalgebra::Vector3;
 

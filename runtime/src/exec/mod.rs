@@ -2,9 +2,10 @@
 //! robot and a plant, and runs the state machine at 1 kHz through the hybrid controller.
 //!
 //! Each tick: read the plant, compute the tool pose and the applied wrench, evaluate the current
-//! state's guards in order and take at most one transition (running the entry actions of the
+//! state's guards in order and take the first that holds (running the entry actions of the
 //! state entered: restart its motion from the current pose, shift a goal, reset the force
-//! integral, tare the sensor), step the DMPs, build the command (pose, twist, wrench, compliant
+//! integral, tare the sensor); the entered state's guards are evaluated at the same instant, so
+//! a chain of transitions takes no time. Then step the DMPs, build the command (pose, twist, wrench, compliant
 //! frame, selection, stiffness, gains), run the controller, apply the torques, step the plant.
 //!
 //! Learned motions describe the flange (the demonstration records the flange); the controller

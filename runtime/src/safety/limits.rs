@@ -36,13 +36,12 @@ impl Workspace {
 
     /// How far `p` lies outside the box \[m\] (0 inside).
     pub fn outside_by(&self, p: [f64; 3]) -> f64 {
-        let mut squared = 0.0;
-        for axis in 0..3 {
-            let below = self.min[axis] - p[axis];
-            let above = p[axis] - self.max[axis];
-            let d = below.max(above).max(0.0);
-            squared += d * d;
-        }
+        let squared: f64 = (0..3)
+            .map(|axis| {
+                let d = (self.min[axis] - p[axis]).max(p[axis] - self.max[axis]).max(0.0);
+                d * d
+            })
+            .sum();
         squared.sqrt()
     }
 }

@@ -275,13 +275,13 @@ impl Supervisor {
         stats.peak_tool_speed_mps = stats.peak_tool_speed_mps.max(speed);
 
         let mut joint_problem = None;
-        for idx in 0..self.lower.len() {
+        for (idx, tau) in torques.iter().enumerate().take(self.lower.len()) {
             let q = obs.q[idx];
             let margin = (q - self.lower[idx]).min(self.upper[idx] - q);
             stats.min_joint_margin_rad = stats.min_joint_margin_rad.min(margin);
             let fraction = obs.qd[idx].abs() / self.velocity[idx];
             stats.peak_joint_speed_fraction = stats.peak_joint_speed_fraction.max(fraction);
-            if torques[idx].abs() >= SATURATION_FRACTION * self.effort[idx] {
+            if tau.abs() >= SATURATION_FRACTION * self.effort[idx] {
                 self.saturated_s[idx] += dt;
                 stats.torque_limit_s += dt;
             } else {

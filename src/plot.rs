@@ -91,6 +91,17 @@ const SEGMENT_COLOURS: [RGBColor; 4] = [
     RGBColor(148, 103, 189),
 ];
 
+/// The colour slot of a variant: its position among the variants seen so far (added if new).
+fn colour_index(seen: &mut Vec<String>, variant: &str) -> usize {
+    match seen.iter().position(|v| v == variant) {
+        Some(index) => index,
+        None => {
+            seen.push(variant.to_string());
+            seen.len() - 1
+        }
+    }
+}
+
 fn trial_colour(index: usize) -> RGBColor {
     const COLOURS: [RGBColor; 6] = [
         RGBColor(214, 39, 40),
@@ -296,14 +307,7 @@ fn trajectory(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResul
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
         let mut variant_index = Vec::<String>::new();
         for (variant, replay, points) in &run_paths {
-            let index = match variant_index.iter().position(|v| v == variant) {
-                Some(i) => i,
-                None => {
-                    variant_index.push(variant.clone());
-                    variant_index.len() - 1
-                }
-            };
-            let colour = trial_colour(index);
+            let colour = trial_colour(colour_index(&mut variant_index, variant));
             let xy: Vec<(f64, f64)> = points.iter().map(|p| (p[pick.0], p[pick.1])).collect();
             if *replay {
                 chart.draw_series(DashedLineSeries::new(xy, 5, 4, colour.stroke_width(1)))?;
@@ -389,14 +393,7 @@ fn force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
         .draw()?;
     let mut variants = Vec::<String>::new();
     for (variant, replay, measured, desired) in &series {
-        let index = match variants.iter().position(|v| v == variant) {
-            Some(i) => i,
-            None => {
-                variants.push(variant.clone());
-                variants.len() - 1
-            }
-        };
-        let colour = trial_colour(index);
+        let colour = trial_colour(colour_index(&mut variants, variant));
         let clipped: Vec<(f64, f64)> = measured.iter().map(|&(t, f)| (t, f.clamp(y0, y1))).collect();
         if *replay {
             chart

@@ -1,11 +1,18 @@
-//! Reading a demonstration CSV by column name.
+//! Reading a demonstration CSV by column name, through the `csv` crate.
 //!
-//! The format is plain numeric CSV: a header row naming the columns, then one row per sample,
-//! fields separated by commas. Blank lines and lines starting with `#` are skipped; a UTF-8 BOM,
-//! `\r\n` line ends, surrounding spaces and double quotes around header names are tolerated. The
-//! parser is written by hand rather than with the `csv` crate because every field is a number,
-//! and hand parsing gives exact 1-based line numbers for every error at no extra cost.
+//! A header row names the columns, then one row per sample. The `csv` crate handles what
+//! spreadsheets, pandas and loggers write: quoted fields (`"0.0000"`), a UTF-8 BOM, `\r\n` line
+//! ends, and other separators: `;` (with a decimal comma, as European spreadsheets write), tab
+//! and `|` are detected from the header line, or set with [`Dialect::delimiter`]. Blank lines
+//! and lines starting with `#` are skipped; spaces around fields are ignored. Every error names
+//! the 1-based line number of the row in the file.
+//!
+//! Columns are found by name, in any order, extra columns ignored: first the exact name, then
+//! the name [`Dialect::columns`] maps it to (`t` → `time`), then common spellings of other
+//! tools, compared without case or punctuation (`time`/`timestamp`, `x`/`pos_x`/`position.x`,
+//! `orientation.w`, `force_x`/`wrench.force.x`, `torque_x`/`tx`).
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -18,6 +25,9 @@ use super::{Demo, DemoError, DemoWarning, Loaded};
 pub const COLUMNS: [&str; 14] = [
     "t", "px", "py", "pz", "qw", "qx", "qy", "qz", "fx", "fy", "fz", "mx", "my", "mz",
 ];
+
+/// Separators tried when none is given, in order of preference on a tie.
+const DELIMITERS: [u8; 4] = [b',', b';', b'\t', b'|'];
 
 /// Options for reading a demonstration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -34,53 +44,203 @@ impl Default for ReadOptions {
     }
 }
 
+/// How a CSV file is written, where it departs from skillc's own: the separator and the
+/// names of the columns. The default detects the separator and finds columns by name.
+///
+/// (A type of its own rather than fields of [`ReadOptions`], so that code building
+/// `ReadOptions { min_samples }` keeps compiling.)
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Dialect {
+    /// The field separator; `None` detects it from the header line (`,`, `;`, tab or `|`,
+    /// whichever occurs most outside quotes; `,` when none does).
+    pub delimiter: Option<u8>,
+    /// The file's names for skillc's columns: `"t" → "time"` reads `t` from the column `time`.
+    /// Columns not named here are found by their own name or a common spelling.
+    pub columns: BTreeMap<String, String>,
+}
+
 /// Reads and validates the demonstration at `path`.
 pub fn read_csv(path: &Path, options: &ReadOptions) -> Result<Loaded, DemoError> {
+    read_csv_as(path, options, &Dialect::default())
+}
+
+/// Reads and validates the demonstration at `path`, written in `dialect`.
+pub fn read_csv_as(path: &Path, options: &ReadOptions, dialect: &Dialect) -> Result<Loaded, DemoError> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|source| DemoError::Io {
         file: file.clone(),
         source,
     })?;
-    parse_csv(&file, &text, options)
+    parse_csv_as(&file, &text, options, dialect)
+}
+
+/// The separator of `header`: the candidate that occurs most often outside double quotes.
+fn detect_delimiter(header: &str) -> u8 {
+    let mut counts = [0usize; DELIMITERS.len()];
+    let mut quoted = false;
+    for byte in header.bytes() {
+        if byte == b'"' {
+            quoted = !quoted;
+        } else if !quoted {
+            if let Some(index) = DELIMITERS.iter().position(|d| *d == byte) {
+                counts[index] += 1;
+            }
+        }
+    }
+    let best = (0..DELIMITERS.len()).fold(0, |best, i| if counts[i] > counts[best] { i } else { best });
+    DELIMITERS[best]
+}
+
+/// Lower case, letters and digits only: `Position.X` and `position_x` compare equal.
+fn normalise(name: &str) -> String {
+    name.chars()
+        .filter(char::is_ascii_alphanumeric)
+        .map(|c| c.to_ascii_lowercase())
+        .collect()
+}
+
+/// Whether `name` (normalised) is another tool's spelling of `column`.
+fn is_alias(column: &str, name: &str) -> bool {
+    let axis = column.chars().last().unwrap_or(' ');
+    match column {
+        "t" => ["time", "times", "timestamp", "stamp", "ts", "sec", "seconds"].contains(&name),
+        "px" | "py" | "pz" => {
+            name == axis.to_string()
+                || name.ends_with(&format!("position{axis}"))
+                || name.ends_with(&format!("pos{axis}"))
+                || name == format!("{axis}m")
+        }
+        "qw" | "qx" | "qy" | "qz" => {
+            name.ends_with(&format!("orientation{axis}"))
+                || name.ends_with(&format!("quaternion{axis}"))
+                || name.ends_with(&format!("quat{axis}"))
+                || name.ends_with(&format!("rotation{axis}"))
+        }
+        "fx" | "fy" | "fz" => name.ends_with(&format!("force{axis}")) || name == format!("f{axis}n"),
+        "mx" | "my" | "mz" => {
+            name.ends_with(&format!("torque{axis}")) || name == format!("t{axis}") || name == format!("m{axis}nm")
+        }
+        _ => false,
+    }
+}
+
+/// The index of each of [`COLUMNS`] in `names`, or the names that could not be found.
+fn find_columns(names: &[String], dialect: &Dialect) -> Result<[usize; 14], Vec<String>> {
+    let normalised: Vec<String> = names.iter().map(|n| normalise(n)).collect();
+    let mut col_idx = [0usize; 14];
+    let mut missing = Vec::new();
+    for (slot, wanted) in col_idx.iter_mut().zip(COLUMNS) {
+        if let Some(theirs) = dialect.columns.get(wanted) {
+            match names.iter().position(|name| name == theirs) {
+                Some(idx) => *slot = idx,
+                None => missing.push(theirs.clone()),
+            }
+            continue;
+        }
+        if let Some(idx) = names.iter().position(|name| name == wanted) {
+            *slot = idx;
+            continue;
+        }
+        let exact: Vec<usize> = (0..names.len()).filter(|&i| normalised[i] == wanted).collect();
+        let aliases: Vec<usize> = (0..names.len()).filter(|&i| is_alias(wanted, &normalised[i])).collect();
+        match (exact.as_slice(), aliases.as_slice()) {
+            ([only], _) | ([], [only]) => *slot = *only,
+            _ => missing.push(wanted.to_owned()),
+        }
+    }
+    if missing.is_empty() {
+        Ok(col_idx)
+    } else {
+        Err(missing)
+    }
+}
+
+/// The 1-based line of the record the reader reports at `byte`. The crate's own line count
+/// and offset do not account for the comment and blank lines it skips before a record, so skip
+/// them here.
+fn line_of(text: &str, byte: usize) -> usize {
+    let byte = byte.min(text.len());
+    let before = text.as_bytes()[..byte].iter().filter(|b| **b == b'\n').count();
+    let skipped = text[byte..]
+        .lines()
+        .take_while(|line| {
+            let line = line.trim();
+            line.is_empty() || line.starts_with('#')
+        })
+        .count();
+    1 + before + skipped
+}
+
+/// Parses one field: a number, with a decimal comma accepted when `,` is not the separator.
+fn number(text: &str, delimiter: u8) -> Option<f64> {
+    text.parse().ok().or_else(|| {
+        (delimiter != b',' && text.matches(',').count() == 1 && !text.contains('.'))
+            .then(|| text.replace(',', ".").parse().ok())
+            .flatten()
+    })
 }
 
 /// Parses and validates demonstration CSV `text`; `file` names it in messages.
 pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded, DemoError> {
+    parse_csv_as(file, text, options, &Dialect::default())
+}
+
+/// Parses and validates demonstration CSV `text` written in `dialect`; `file` names it in
+/// messages.
+pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dialect) -> Result<Loaded, DemoError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
+    let header_line = text
         .lines()
-        .enumerate()
-        .map(|(idx, line)| (idx + 1, line.trim()))
-        .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'));
-    let Some((_, header)) = lines.next() else {
+        .map(str::trim)
+        .find(|line| !line.is_empty() && !line.starts_with('#'));
+    let Some(header_line) = header_line else {
         return Err(DemoError::Empty { file: file.to_owned() });
     };
-    let names: Vec<&str> = header
-        .split(',')
-        .map(|name| name.trim().trim_matches('"').trim())
-        .collect();
+    let delimiter = dialect.delimiter.unwrap_or_else(|| detect_delimiter(header_line));
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .delimiter(delimiter)
+        .comment(Some(b'#'))
+        .trim(::csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let malformed = |err: ::csv::Error| {
+        let line = err.position().map_or(0, ::csv::Position::line);
+        DemoError::Io {
+            file: file.to_owned(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, format!("line {line}: {err}")),
+        }
+    };
+    let mut records = reader.records();
+    // Rows of spaces only are blank lines too.
+    let mut next_row = || -> Result<Option<(usize, ::csv::StringRecord)>, DemoError> {
+        for record in records.by_ref() {
+            let record = record.map_err(&malformed)?;
+            if record.iter().all(str::is_empty) {
+                continue;
+            }
+            let byte = record.position().map_or(0, |p| p.byte() as usize);
+            return Ok(Some((line_of(text, byte), record)));
+        }
+        Ok(None)
+    };
+    let Some((_, header)) = next_row()? else {
+        return Err(DemoError::Empty { file: file.to_owned() });
+    };
+    let names: Vec<String> = header.iter().map(|name| name.trim().to_owned()).collect();
     for (idx, name) in names.iter().enumerate() {
-        if names[..idx].contains(name) && COLUMNS.contains(name) {
+        if names[..idx].contains(name) && COLUMNS.contains(&name.as_str()) {
             return Err(DemoError::DuplicateColumn {
                 file: file.to_owned(),
-                column: (*name).to_owned(),
+                column: name.clone(),
             });
         }
     }
-    let mut col_idx = [0usize; 14];
-    let mut missing = Vec::new();
-    for (slot, wanted) in col_idx.iter_mut().zip(COLUMNS) {
-        match names.iter().position(|name| *name == wanted) {
-            Some(idx) => *slot = idx,
-            None => missing.push(wanted.to_owned()),
-        }
-    }
-    if !missing.is_empty() {
-        return Err(DemoError::MissingColumns {
-            file: file.to_owned(),
-            columns: missing,
-        });
-    }
+    let col_idx = find_columns(&names, dialect).map_err(|columns| DemoError::MissingColumns {
+        file: file.to_owned(),
+        columns,
+    })?;
 
     let mut demo = Demo {
         source: file.to_owned(),
@@ -92,11 +252,8 @@ pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded
     };
     let mut rows = Vec::new();
     let mut values = [0.0f64; 14];
-    let mut fields: Vec<&str> = Vec::with_capacity(names.len());
     let mut renormalised = (0usize, 0usize, 0.0f64);
-    for (row, line) in lines {
-        fields.clear();
-        fields.extend(line.split(','));
+    while let Some((row, fields)) = next_row()? {
         if fields.len() != names.len() {
             return Err(DemoError::Ragged {
                 file: file.to_owned(),
@@ -106,8 +263,8 @@ pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded
             });
         }
         for ((value, &idx), column) in values.iter_mut().zip(&col_idx).zip(COLUMNS) {
-            let text = fields[idx].trim();
-            let parsed: f64 = text.parse().map_err(|_| DemoError::NotANumber {
+            let text = fields.get(idx).unwrap_or_default().trim();
+            let parsed = number(text, delimiter).ok_or_else(|| DemoError::NotANumber {
                 file: file.to_owned(),
                 row,
                 column: column.to_owned(),
@@ -319,5 +476,74 @@ mod tests {
         let text = format!("{HEADER}\n{}\n{}\n{}\n", row(0.0), row(0.001), row(0.0125));
         let loaded = parse(&text).expect("irregular is fine");
         assert_eq!(loaded.demo.t_s, vec![0.0, 0.001, 0.0125]);
+    }
+
+    #[test]
+    fn quoted_fields_bom_and_crlf_are_read() {
+        let quoted: Vec<String> = HEADER.split(',').map(|c| format!("\"{c}\"")).collect();
+        let text = format!(
+            "\u{feff}{}\r\n\"0.0000\",\"0.1\",0.2,0.3,1,0,0,0,0,0,-5,0,0,0\r\n{}\r\n",
+            quoted.join(","),
+            row(0.01)
+        );
+        let loaded = parse(&text).expect("pandas-style file");
+        assert_eq!(loaded.demo.t_s, vec![0.0, 0.01]);
+        assert_eq!(loaded.demo.position_m[0], Vector3::new(0.1, 0.2, 0.3));
+    }
+
+    #[test]
+    fn semicolons_with_decimal_commas_and_tabs_are_detected() {
+        let semi = format!(
+            "{}\n0;0,1;0,2;0,3;1;0;0;0;0;0;-5;0;0;0\n0,01;0,1;0,2;0,3;1;0;0;0;0;0;-5;0;0;0\n",
+            HEADER.replace(',', ";")
+        );
+        let loaded = parse(&semi).expect("semicolons");
+        assert_eq!(loaded.demo.t_s, vec![0.0, 0.01]);
+        assert_eq!(loaded.demo.position_m[1], Vector3::new(0.1, 0.2, 0.3));
+        let tabs = format!(
+            "{}\n{}\n{}\n",
+            HEADER.replace(',', "\t"),
+            row(0.0).replace(',', "\t"),
+            row(0.01).replace(',', "\t")
+        );
+        assert_eq!(parse(&tabs).expect("tabs").demo.len(), 2);
+        // A separator given explicitly wins over detection.
+        let dialect = Dialect {
+            delimiter: Some(b','),
+            ..Dialect::default()
+        };
+        let err = parse_csv_as("demo.csv", &semi, &ReadOptions::default(), &dialect).expect_err("not commas");
+        assert!(matches!(err, DemoError::MissingColumns { .. }), "{err}");
+    }
+
+    #[test]
+    fn other_tools_column_names_are_mapped() {
+        let header = "Time,position.x,position.y,position.z,orientation.w,orientation.x,orientation.y,orientation.z,force_x,force_y,force_z,torque_x,torque_y,torque_z";
+        let text = format!("{header}\n{}\n{}\n", row(0.0), row(0.01));
+        let loaded = parse(&text).expect("ROS-style names");
+        assert_eq!(loaded.demo.force_n[0], Vector3::new(0.0, 0.0, -5.0));
+        let header = "stamp,a,b,c,qw,qx,qy,qz,fx,fy,fz,mx,my,mz";
+        let text = format!("{header}\n{}\n{}\n", row(0.0), row(0.01));
+        assert!(matches!(parse(&text), Err(DemoError::MissingColumns { .. })));
+        let columns = [("px", "a"), ("py", "b"), ("pz", "c")]
+            .into_iter()
+            .map(|(ours, theirs)| (ours.to_owned(), theirs.to_owned()))
+            .collect();
+        let dialect = Dialect {
+            columns,
+            ..Dialect::default()
+        };
+        let loaded = parse_csv_as("demo.csv", &text, &ReadOptions::default(), &dialect).expect("mapped by the user");
+        assert_eq!(loaded.demo.position_m[1], Vector3::new(0.1, 0.2, 0.3));
+    }
+
+    #[test]
+    fn errors_name_the_line_past_comments_and_blank_lines() {
+        let text = format!(
+            "# recorded today\n{HEADER}\n\n{}\n   \n# pause\n0.01,0.1,x,0.3,1,0,0,0,0,0,0,0,0,0\n",
+            row(0.0)
+        );
+        let err = parse(&text).expect_err("not a number");
+        assert!(matches!(err, DemoError::NotANumber { row: 7, .. }), "{err}");
     }
 }

@@ -14,7 +14,7 @@ mod quat;
 mod resample;
 mod sign;
 
-pub use self::csv::{parse_csv, read_csv, ReadOptions, COLUMNS};
+pub use self::csv::{parse_csv, parse_csv_as, read_csv, read_csv_as, Dialect, ReadOptions, COLUMNS};
 pub use self::filter::{low_pass, FilterOrder};
 pub use self::resample::resample;
 pub use self::sign::{negate_wrench, stores_applied_force};

@@ -8,6 +8,7 @@
 pub mod learn;
 pub mod learned;
 pub mod rollout;
+pub mod validate;
 
 pub use learn::{learn_skill, LearnError, LearnOptions};
 pub use learned::{

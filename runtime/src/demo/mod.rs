@@ -10,14 +10,22 @@
 
 mod csv;
 mod filter;
+mod noise;
+mod prepare;
 mod quat;
 mod resample;
 mod sign;
+mod timing;
 
 pub use self::csv::{parse_csv, parse_csv_as, read_csv, read_csv_as, Dialect, ReadOptions, COLUMNS};
-pub use self::filter::{low_pass, FilterOrder};
+pub use self::filter::{low_pass, low_pass_motion, FilterOrder};
+pub use self::noise::{noise_std, position_noise_m};
+pub use self::prepare::{
+    default_motion_cutoff_hz, prepare, Prepared, Smoothing, DEFAULT_MOTION_CUTOFF_HZ, MOTION_BAND_HZ,
+};
 pub use self::resample::resample;
 pub use self::sign::{negate_wrench, stores_applied_force};
+pub use self::timing::{check_timing, median_step_s, GAP_ERROR_S, GAP_FACTOR, MAX_RATE_HZ, MIN_RATE_HZ};
 
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
@@ -107,6 +115,26 @@ pub enum DemoWarning {
         /// First such row (1-based line number in the file).
         first_row: usize,
     },
+    /// Steps of more than ten median steps (dropped samples), short enough to interpolate.
+    TimeSteps {
+        /// Source file.
+        file: String,
+        /// How many such steps.
+        count: usize,
+        /// Data row (1-based, header not counted) before the first one.
+        first_row: usize,
+        /// The longest of them \[s\].
+        largest_step_s: f64,
+        /// The median step \[s\].
+        median_step_s: f64,
+    },
+    /// The positions are noisy and were not smoothed.
+    NoisyPositions {
+        /// Source file.
+        file: String,
+        /// Estimated noise per axis \[m\].
+        noise_m: f64,
+    },
 }
 
 impl std::fmt::Display for DemoWarning {
@@ -119,6 +147,17 @@ impl std::fmt::Display for DemoWarning {
             DemoWarning::SignFlipped { file, count, first_row } => write!(
                 f,
                 "negated {count} quaternion(s) in `{file}` to make them sign-continuous (first at row {first_row})"
+            ),
+            DemoWarning::TimeSteps { file, count, first_row, largest_step_s, median_step_s } => write!(
+                f,
+                "{count} step(s) in the time column of `{file}` exceed ten median steps ({:.2} ms), the first after data row {first_row}, the longest {:.1} ms: samples were dropped; they are interpolated",
+                median_step_s * 1e3,
+                largest_step_s * 1e3
+            ),
+            DemoWarning::NoisyPositions { file, noise_m } => write!(
+                f,
+                "the positions in `{file}` carry {:.3} mm of noise and are not smoothed: learned motions will be rough; set `lowpass` (e.g. --lowpass 20) or record faster",
+                noise_m * 1e3
             ),
         }
     }
@@ -276,6 +315,34 @@ pub enum DemoError {
         value: f64,
         /// Why it is rejected.
         reason: String,
+    },
+    /// The median sample rate is implausible: the time column is not in seconds.
+    #[error("the time column of `{file}` looks like it is in the wrong unit: its median step is {median_step} (read as seconds: {:.3e} Hz, a recorder runs at 10 Hz .. 100 kHz); {hint}", 1.0 / .median_step)]
+    TimeUnit {
+        /// Path of the file.
+        file: String,
+        /// The median step between samples, in the file's unit.
+        median_step: f64,
+        /// What the unit probably is and what to do.
+        hint: String,
+    },
+    /// Time jumps by far more than the median step: samples are missing.
+    #[error("`{file}` has a gap in its time column: {step_s:.3} s between data rows {row} and {} (t = {from_s:.3} s and {to_s:.3} s; the median step is {:.2} ms){}; cut the file at the gap or record again", .row + 1, .median_step_s * 1e3, if *.count > 1 { format!(", and {} more gap(s) longer than 0.1 s", .count - 1) } else { String::new() })]
+    TimeGap {
+        /// Path of the file.
+        file: String,
+        /// 1-based data row (header not counted) of the sample before the gap.
+        row: usize,
+        /// Time before the gap \[s\].
+        from_s: f64,
+        /// Time after the gap \[s\].
+        to_s: f64,
+        /// The step \[s\].
+        step_s: f64,
+        /// The median step \[s\].
+        median_step_s: f64,
+        /// How many such gaps the file has.
+        count: usize,
     },
     /// Filtering needs evenly spaced samples.
     #[error("demonstration `{file}` is irregularly sampled (period {min_dt_s:.3e}..{max_dt_s:.3e} s): resample it before filtering")]

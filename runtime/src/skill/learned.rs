@@ -328,6 +328,12 @@ pub struct Quality {
     pub forces_rms_n: BTreeMap<String, f64>,
     /// Per fitted frame: the constraint fits (every candidate, the chosen one marked).
     pub constraints: BTreeMap<String, Vec<ConstraintQuality>>,
+    /// Estimated position noise per axis of the demonstration as read \[m\] (docs/method.md §1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_noise_m: Option<f64>,
+    /// How the demonstration was smoothed before learning, e.g. `motion low-pass 20 Hz (default)`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub smoothing: String,
 }
 
 /// How well a motion reproduces its segment.
@@ -337,6 +343,12 @@ pub struct MotionQuality {
     pub position_rms_m: [f64; 3],
     /// RMS orientation error \[rad\].
     pub orientation_rms_rad: f64,
+    /// Peak speed of the rollout \[m/s\] (0 in files written before it was recorded).
+    #[serde(default)]
+    pub peak_speed_mps: f64,
+    /// Peak speed of the demonstrated segment, smoothed \[m/s\].
+    #[serde(default)]
+    pub demo_peak_speed_mps: f64,
 }
 
 /// One constraint model's fit on a segment.

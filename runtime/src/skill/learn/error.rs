@@ -81,4 +81,15 @@ pub enum LearnError {
         #[source]
         source: ForceError,
     },
+    /// A learned motion does not describe its demonstration: its reconstruction error or its
+    /// speed is beyond the hard bounds of docs/method.md §2.
+    #[error("refusing to learn motion `{name}`: {reason}; {hint}")]
+    Implausible {
+        /// The motion.
+        name: String,
+        /// What is wrong, with the figures.
+        reason: String,
+        /// What to try.
+        hint: String,
+    },
 }

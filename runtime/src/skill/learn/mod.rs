@@ -21,13 +21,14 @@ use skill_ir as ir;
 use std::collections::BTreeMap;
 
 use super::learned::{ir_hash, DemoInfo, Learned, LearnedFrame, LearnedSegment, Quality, LEARNED_VERSION};
-use crate::demo::{preprocess, Demo, FilterOrder, PreprocessConfig};
+use crate::demo::{prepare, Demo, FilterOrder, PreprocessConfig, Smoothing};
 use crate::learn::segment::{segment_demo, Segment, SegmentError, Segmentation};
 
 /// Options of `skillc learn` that override the template.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LearnOptions {
-    /// Low-pass cut-off \[Hz\], replacing the template's `lowpass`.
+    /// Low-pass cut-off \[Hz\], replacing the template's `lowpass`; 0 switches off all
+    /// smoothing, the default motion low-pass included (docs/method.md §1).
     pub lowpass_hz: Option<f64>,
     /// Resampling rate \[Hz\], replacing the template's `resample`.
     pub resample_hz: Option<f64>,
@@ -36,7 +37,8 @@ pub struct LearnOptions {
 /// Forces below this are not contact \[N\].
 const CONTACT_N: f64 = 1.0;
 
-/// Learns `skill`'s features from `demo` (warnings are the reader's, kept in the file).
+/// Learns `skill`'s features from `demo` (warnings are the reader's, kept in the file with the
+/// ones preparing the demonstration and learning raise).
 pub fn learn_skill(
     skill: &ir::Skill,
     demo: &Demo,
@@ -49,7 +51,10 @@ pub fn learn_skill(
         lowpass_cutoff_hz: options.lowpass_hz.or(plan.lowpass_hz),
         lowpass_order: FilterOrder::default(),
     };
-    let demo = preprocess(demo, &config)?;
+    let prepared = prepare(demo, &config)?;
+    let demo = prepared.demo;
+    let mut warnings = warnings.to_vec();
+    warnings.extend(prepared.warnings.iter().map(ToString::to_string));
     let segments = segment(plan, &demo)?;
     let n = demo.len();
     let rate_hz = if demo.duration_s() > 0.0 {
@@ -61,7 +66,13 @@ pub fn learn_skill(
         demo: &demo,
         segments: &segments,
         frames: Vec::new(),
-        quality: Quality::default(),
+        quality: Quality {
+            position_noise_m: prepared.position_noise_m,
+            smoothing: prepared.smoothing.to_string(),
+            ..Quality::default()
+        },
+        smoothing: prepared.smoothing,
+        warnings: Vec::new(),
     };
 
     let mut frames = BTreeMap::new();
@@ -105,7 +116,7 @@ pub fn learn_skill(
             samples: n,
             duration_s: demo.duration_s(),
             rate_hz,
-            warnings: warnings.to_vec(),
+            warnings: warnings.into_iter().chain(learner.warnings).collect(),
         },
         segments,
         frames,
@@ -157,6 +168,10 @@ struct Learner<'a> {
     /// frames are timed from (0 for constant frames).
     frames: Vec<(LearnedFrame, f64)>,
     quality: Quality,
+    /// How the demonstration was smoothed (the plausibility checks' advice depends on it).
+    smoothing: Smoothing,
+    /// Warnings raised while learning.
+    warnings: Vec<String>,
 }
 
 impl Learner<'_> {

@@ -90,6 +90,14 @@ pub fn summary(learned: &Learned) -> String {
         "learned `{}` from `{}` ({} samples, {:.2} s, {:.0} Hz)",
         learned.skill, learned.demo.source, learned.demo.samples, learned.demo.duration_s, learned.demo.rate_hz
     );
+    if let Some(noise) = learned.quality.position_noise_m {
+        let _ = writeln!(
+            out,
+            "  position noise {:.3} mm per axis; {}",
+            noise * 1e3,
+            learned.quality.smoothing
+        );
+    }
     for warning in &learned.demo.warnings {
         let _ = writeln!(out, "  warning: {warning}");
     }

@@ -93,8 +93,12 @@ pub fn summary(learned: &Learned) -> String {
     if let Some(noise) = learned.quality.position_noise_m {
         let _ = writeln!(
             out,
-            "  position noise {:.3} mm per axis; {}",
-            noise * 1e3,
+            "  position noise {} per axis; {}",
+            if noise < 1e-5 {
+                format!("{:.2} µm", noise * 1e6)
+            } else {
+                format!("{:.3} mm", noise * 1e3)
+            },
             learned.quality.smoothing
         );
     }

@@ -3,9 +3,12 @@
 //! Exit codes: 0 success (warnings allowed), 1 problems found in the input (diagnostics,
 //! unformatted files, a failed skill), 2 usage or IO errors.
 
+use crate::load::Failure;
+use crate::out::{self, Verbosity};
 use crate::{atomic, frontend, render};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
 use skill_compiler::graph::GraphFormat;
+use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -14,6 +17,12 @@ use std::process::ExitCode;
 #[derive(Debug, Parser)]
 #[command(name = "skillc", version, about, long_about = None, after_help = EXAMPLES)]
 pub struct Cli {
+    /// Print only errors and diagnostics: no summaries, no "wrote" lines.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Also print what was read and written, and timings.
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
@@ -129,6 +138,25 @@ pub enum Command {
         /// The file.
         file: PathBuf,
     },
+    /// Print a shell completion script.
+    #[command(after_help = "Examples:
+  skillc completions bash > ~/.local/share/bash-completion/completions/skillc
+  skillc completions zsh > ~/.zfunc/_skillc
+  skillc completions fish > ~/.config/fish/completions/skillc.fish")]
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff), or write one page per command into a folder.
+    #[command(after_help = "Examples:
+  skillc man | man -l -
+  skillc man --out ~/.local/share/man/man1")]
+    Man {
+        /// Write `skillc.1` and `skillc-<command>.1` here instead of printing `skillc.1`.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+    },
 }
 
 /// Diagnostic output formats.
@@ -160,27 +188,82 @@ pub enum Stage {
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> ExitCode {
+    let verbosity = Verbosity::from_flags(cli.quiet, cli.verbose);
     let code = match cli.command {
         Command::Check {
             files,
             format,
             deny_warnings,
-        } => check(&files, format, deny_warnings),
+        } => check(&files, format, deny_warnings, verbosity),
         Command::Compile { file, output } => compile(&file, output.as_deref()),
         Command::Graph { file, format, output } => graph(&file, format, output.as_deref()),
-        Command::Fmt { files, check } => fmt(&files, check),
+        Command::Fmt { files, check } => fmt(&files, check, verbosity),
         Command::Dump { stage, file } => dump(&file, stage),
-        Command::Demos { out, check } => demos(&out, check),
-        Command::Learn(args) => crate::learn_cmd::run(&args),
-        Command::Rollout(args) => crate::learn_cmd::rollout(&args),
+        Command::Demos { out, check } => demos(&out, check, verbosity),
+        Command::Learn(args) => crate::learn_cmd::run(&args, verbosity),
+        Command::Rollout(args) => crate::learn_cmd::rollout(&args, verbosity),
         Command::Run(args) => crate::run_cmd::run(&args),
         Command::Eval(args) => crate::eval::run(&args),
-        Command::Robot(args) => match crate::robot_cmd::run(&args) {
-            Ok(()) => 0,
-            Err(err) => usage_error(err),
-        },
+        Command::Robot(args) => crate::robot_cmd::run(&args),
+        Command::Completions { shell } => completions(shell),
+        Command::Man { out } => man(out.as_deref(), verbosity),
     };
     ExitCode::from(code)
+}
+
+/// The command line's definition, for completions and the manual.
+fn command() -> clap::Command {
+    Cli::command()
+}
+
+fn completions(shell: clap_complete::Shell) -> u8 {
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut command(), "skillc", &mut script);
+    print_or_code(&String::from_utf8_lossy(&script))
+}
+
+fn man_page(cmd: clap::Command) -> Result<Vec<u8>, std::io::Error> {
+    let mut page = Vec::new();
+    clap_mangen::Man::new(cmd).render(&mut page)?;
+    Ok(page)
+}
+
+fn man(out: Option<&Path>, verbosity: Verbosity) -> u8 {
+    let mut cmd = command();
+    cmd.build();
+    let Some(dir) = out else {
+        return match man_page(cmd) {
+            Ok(page) => print_or_code(&String::from_utf8_lossy(&page)),
+            Err(err) => usage_error(format!("cannot render the manual: {err}")),
+        };
+    };
+    if let Err(err) = std::fs::create_dir_all(dir) {
+        return usage_error(format!("cannot create `{}`: {err}", dir.display()));
+    }
+    let mut pages = vec![("skillc.1".to_string(), cmd.clone())];
+    for sub in cmd.get_subcommands().filter(|sub| sub.get_name() != "help") {
+        // `build` named them `skillc-<command>` for display, which the page title uses.
+        pages.push((
+            format!("skillc-{}.1", sub.get_name()),
+            sub.clone().version(env!("CARGO_PKG_VERSION")),
+        ));
+    }
+    for (file, page) in pages {
+        let path = dir.join(file);
+        let written = man_page(page).and_then(|bytes| atomic::write(&path, &bytes));
+        if let Err(err) = written {
+            return usage_error(format!("cannot write `{}`: {err}", path.display()));
+        }
+        verbosity.detail(format_args!("wrote `{}`", path.display()));
+    }
+    verbosity.note(format_args!("wrote the manual pages into `{}`", dir.display()));
+    0
+}
+
+/// Prints `text` to standard output; the exit code to return when that failed (0 for a closed
+/// pipe, 2 otherwise), or 0.
+fn print_or_code(text: &str) -> u8 {
+    out::print_or_code(text).err().unwrap_or(0)
 }
 
 fn usage_error(message: impl std::fmt::Display) -> u8 {
@@ -199,21 +282,21 @@ fn terminal_width() -> usize {
 fn print_diags(compilation: &skill_compiler::Compilation) {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let mut stderr = std::io::stderr().lock();
+    // Standard error that is closed or full has nowhere to report to: the exit code tells.
     for diag in &compilation.diags {
         let _ = write!(stderr, "{}", render::human(diag, compilation, color, terminal_width()));
     }
 }
 
-fn check(files: &[PathBuf], format: Format, deny_warnings: bool) -> u8 {
-    let mut io_error = false;
+fn check(files: &[PathBuf], format: Format, deny_warnings: bool, verbosity: Verbosity) -> u8 {
+    let mut unreadable = 0;
     let (mut errors, mut warnings) = (0, 0);
-    let mut stdout = std::io::stdout().lock();
     for path in files {
         let compilation = match frontend::compile_path(path) {
             Ok(compilation) => compilation,
             Err(err) => {
                 eprintln!("error: {err}");
-                io_error = true;
+                unreadable += 1;
                 continue;
             }
         };
@@ -223,26 +306,39 @@ fn check(files: &[PathBuf], format: Format, deny_warnings: bool) -> u8 {
         match format {
             Format::Human => print_diags(&compilation),
             Format::Json => {
+                let mut lines = String::new();
                 for diag in &compilation.diags {
-                    let _ = writeln!(stdout, "{}", render::json(diag, &compilation));
+                    let _ = writeln!(lines, "{}", render::json(diag, &compilation));
+                }
+                if let Err(failure) = out::print(&lines) {
+                    return failure.report();
                 }
             }
         }
+        verbosity.detail(format_args!(
+            "checked `{}`: {e} error(s), {w} warning(s)",
+            path.display()
+        ));
     }
-    if format == Format::Human {
+    let checked = files.len() - unreadable;
+    if format == Format::Human && !verbosity.quiet() && checked > 0 {
         let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
-        if errors + warnings == 0 && !io_error {
-            eprintln!("checked {}: no problems", plural(files.len(), "file"));
+        let mut line = if errors + warnings == 0 {
+            format!("checked {}: no problems", plural(checked, "file"))
         } else {
-            eprintln!(
+            format!(
                 "checked {}: {}, {}",
-                plural(files.len(), "file"),
+                plural(checked, "file"),
                 plural(errors, "error"),
                 plural(warnings, "warning")
-            );
+            )
+        };
+        if unreadable > 0 {
+            let _ = write!(line, "; {} could not be read", plural(unreadable, "file"));
         }
+        eprintln!("{line}");
     }
-    if io_error {
+    if unreadable > 0 {
         2
     } else if errors > 0 || (deny_warnings && warnings > 0) {
         1
@@ -274,18 +370,22 @@ fn emit(output: Option<&Path>, text: &str) -> u8 {
             Ok(()) => 0,
             Err(err) => usage_error(format!("cannot write `{}`: {err}", path.display())),
         },
-        None => {
-            let mut stdout = std::io::stdout().lock();
-            match stdout.write_all(text.as_bytes()) {
-                Ok(()) => 0,
-                Err(err) if err.kind() == std::io::ErrorKind::BrokenPipe => 0,
-                Err(err) => usage_error(format!("cannot write to standard output: {err}")),
-            }
-        }
+        None => print_or_code(text),
+    }
+}
+
+/// Refuses `-o` naming the input (or any file the input imports is left to the user).
+fn refuse_input(output: Option<&Path>, input: &Path) -> Result<(), u8> {
+    match output {
+        Some(out) => atomic::refuse_inputs(out, "-o", &[input]).map_err(usage_error),
+        None => Ok(()),
     }
 }
 
 fn compile(path: &Path, output: Option<&Path>) -> u8 {
+    if let Err(code) = refuse_input(output, path) {
+        return code;
+    }
     let compilation = match compile_or_report(path) {
         Ok(compilation) => compilation,
         Err(code) => return code,
@@ -304,6 +404,9 @@ fn compile(path: &Path, output: Option<&Path>) -> u8 {
 }
 
 fn graph(path: &Path, format: GraphKind, output: Option<&Path>) -> u8 {
+    if let Err(code) = refuse_input(output, path) {
+        return code;
+    }
     let compilation = match compile_or_report(path) {
         Ok(compilation) => compilation,
         Err(code) => return code,
@@ -319,7 +422,7 @@ fn graph(path: &Path, format: GraphKind, output: Option<&Path>) -> u8 {
     emit(output, &skill_compiler::graph::render(program, format))
 }
 
-fn fmt(files: &[PathBuf], check_only: bool) -> u8 {
+fn fmt(files: &[PathBuf], check_only: bool, verbosity: Verbosity) -> u8 {
     let mut status = 0;
     for path in files {
         let name = path.to_string_lossy().replace('\\', "/");
@@ -361,16 +464,26 @@ fn fmt(files: &[PathBuf], check_only: bool) -> u8 {
         }
         let formatted = skill_compiler::fmt::format(&source, &ast);
         if formatted == *source.text {
+            verbosity.detail(format_args!("`{name}` is formatted"));
             continue;
         }
-        if check_only {
-            println!("would reformat `{name}`");
+        let line = if check_only {
             status = status.max(1);
+            format!("would reformat `{name}`\n")
         } else if let Err(err) = atomic::write(path, formatted.as_bytes()) {
             eprintln!("error: cannot write `{name}`: {err}");
             status = 2;
+            continue;
+        } else if verbosity.quiet() {
+            continue;
         } else {
-            println!("formatted `{name}`");
+            format!("formatted `{name}`\n")
+        };
+        if let Err(failure) = out::print(&line) {
+            return match failure {
+                Failure::Closed => status,
+                other => other.report(),
+            };
         }
     }
     status
@@ -384,14 +497,16 @@ fn dump(path: &Path, stage: Stage) -> u8 {
                 Err(err) => return usage_error(err),
             };
             print_diags(&compilation);
-            println!("{:#?}", compilation.ast);
-            u8::from(compilation.has_errors())
+            match out::print_or_code(&format!("{:#?}\n", compilation.ast)) {
+                Ok(()) => u8::from(compilation.has_errors()),
+                Err(code) => code,
+            }
         }
         Stage::Ir => compile(path, None),
     }
 }
 
-fn demos(out: &Path, check_only: bool) -> u8 {
+fn demos(out: &Path, check_only: bool, verbosity: Verbosity) -> u8 {
     use skill_runtime::demogen::{generate, to_csv, StdSkill};
     if !check_only {
         if let Err(err) = std::fs::create_dir_all(out) {
@@ -409,22 +524,27 @@ fn demos(out: &Path, check_only: bool) -> u8 {
             (out.join(format!("{}.csv", skill.name())), to_csv(&demo)),
             (out.join(format!("{}.truth.json", skill.name())), truth),
         ] {
-            if check_only {
+            let line = if check_only {
                 match std::fs::read_to_string(&path) {
-                    Ok(existing) if existing == text => {}
+                    Ok(existing) if existing == text => continue,
                     Ok(_) => {
-                        println!("`{}` differs from the generator", path.display());
                         status = 1;
+                        format!("`{}` differs from the generator\n", path.display())
                     }
                     Err(err) => {
-                        println!("`{}` cannot be read: {err}", path.display());
                         status = 1;
+                        format!("`{}` cannot be read: {err}\n", path.display())
                     }
                 }
             } else if let Err(err) = atomic::write(&path, text.as_bytes()) {
                 return usage_error(format!("cannot write `{}`: {err}", path.display()));
+            } else if verbosity.quiet() {
+                continue;
             } else {
-                println!("wrote `{}` ({} samples)", path.display(), demo.samples.len());
+                format!("wrote `{}` ({} samples)\n", path.display(), demo.samples.len())
+            };
+            if let Err(code) = out::print_or_code(&line) {
+                return code.max(status);
             }
         }
     }

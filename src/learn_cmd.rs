@@ -1,22 +1,26 @@
 //! `skillc learn SKILL DEMO.csv -o OUT.learned.json` and `skillc rollout`: learning a template's
 //! features from one demonstration, and previewing what was learned.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use skill_runtime::demo::{Dialect, COLUMNS};
 use skill_runtime::exec::bind;
 use skill_runtime::skill::{LearnOptions, Learned, LearnedForce, LearnedFrame};
 
-use crate::atomic;
-use crate::load::{learn_from_file, load_skill, read_learned, Failure};
+use crate::load::{learn_from_demo, load_skill, read_learned, Failure};
+use crate::out::{self, Verbosity};
 use crate::plot::{self, Plot, Subject};
+use crate::{atomic, limits};
 
 /// Arguments of `skillc learn`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct LearnArgs {
     /// The `.skill` file.
     pub skill_file: PathBuf,
-    /// The demonstration CSV (columns t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz).
+    /// The demonstration CSV (columns t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz;
+    /// separated by commas, semicolons, tabs or bars, detected from the header line).
     pub demo: PathBuf,
     /// Where to write the learned features (JSON, written atomically).
     #[arg(short, long)]
@@ -24,12 +28,21 @@ pub struct LearnArgs {
     /// The skill to learn, when the file defines several.
     #[arg(long)]
     pub skill: Option<String>,
-    /// Low-pass cut-off \[Hz\], overriding the template's `lowpass`.
-    #[arg(long, value_name = "HZ")]
+    /// Low-pass cut-off in Hz (0.1 to 10000), overriding the template's `lowpass`.
+    #[arg(long, value_name = "HZ", value_parser = limits::rate_hz)]
     pub lowpass: Option<f64>,
-    /// Resampling rate \[Hz\], overriding the template's `resample`.
-    #[arg(long, value_name = "HZ")]
+    /// Resampling rate in Hz (0.1 to 10000), overriding the template's `resample`.
+    #[arg(long, value_name = "HZ", value_parser = limits::rate_hz)]
     pub resample: Option<f64>,
+    /// The demonstration's field separator: `,`, `;`, `tab`, `|` or any single character
+    /// (default: detected from the header line).
+    #[arg(long, value_name = "SEP", value_parser = parse_delimiter)]
+    pub delimiter: Option<u8>,
+    /// The demonstration's names for skillc's columns, e.g. `t=time,px=x,py=y,pz=z` (skillc's
+    /// name first). Common spellings (time, position.x, orientation.w, force_x, torque_x) are
+    /// found without it.
+    #[arg(long, value_name = "OURS=THEIRS,...", value_parser = parse_columns)]
+    pub columns: Option<BTreeMap<String, String>>,
     /// The file's forces are the force the robot applies (not, as skillc expects, the force the
     /// environment exerts on the tool): negate them before learning.
     #[arg(long)]
@@ -40,24 +53,77 @@ pub struct LearnArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// Runs `skillc learn`.
-pub fn run(args: &LearnArgs) -> u8 {
-    match learn(args) {
-        Ok(summary) => {
-            print!("{summary}");
-            0
+/// `--delimiter`: one character, or `tab`.
+pub fn parse_delimiter(text: &str) -> Result<u8, String> {
+    match text {
+        "tab" | "\\t" | "\t" => Ok(b'\t'),
+        _ => match text.as_bytes() {
+            [byte] if byte.is_ascii() && *byte != b'"' && *byte != b'\n' && *byte != b'\r' => Ok(*byte),
+            _ => Err(format!("`{text}` is not one ASCII character (or `tab`)")),
+        },
+    }
+}
+
+/// `--columns t=time,px=x,...`: skillc's column name, `=`, the file's. A pair written the
+/// other way round (`time=t`) is read the right way, since only one side is one of skillc's.
+pub fn parse_columns(text: &str) -> Result<BTreeMap<String, String>, String> {
+    let mut map = BTreeMap::new();
+    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let Some((left, right)) = pair.split_once('=') else {
+            return Err(format!("`{pair}` must look like OURS=THEIRS, e.g. t=time"));
+        };
+        let (left, right) = (left.trim(), right.trim());
+        let (ours, theirs) = if COLUMNS.contains(&left) {
+            (left, right)
+        } else if COLUMNS.contains(&right) {
+            (right, left)
+        } else {
+            return Err(format!(
+                "neither `{left}` nor `{right}` is one of skillc's columns ({})",
+                COLUMNS.join(", ")
+            ));
+        };
+        if theirs.is_empty() {
+            return Err(format!("`{pair}` names no column of the file"));
         }
+        if map.insert(ours.to_owned(), theirs.to_owned()).is_some() {
+            return Err(format!("column `{ours}` is mapped twice"));
+        }
+    }
+    Ok(map)
+}
+
+/// Runs `skillc learn`.
+pub fn run(args: &LearnArgs, verbosity: Verbosity) -> u8 {
+    let started = std::time::Instant::now();
+    let result = learn(args).and_then(|summary| {
+        if verbosity.verbose() {
+            eprintln!("learned in {:.2} s", started.elapsed().as_secs_f64());
+        }
+        if verbosity.quiet() {
+            Ok(())
+        } else {
+            out::print(&summary)
+        }
+    });
+    match result {
+        Ok(()) => 0,
         Err(failure) => failure.report(),
     }
 }
 
 fn learn(args: &LearnArgs) -> Result<String, Failure> {
+    atomic::refuse_inputs(&args.output, "-o", &[&args.skill_file, &args.demo]).map_err(Failure::Usage)?;
     let (_, skill) = load_skill(&args.skill_file, args.skill.as_deref())?;
     let options = LearnOptions {
         lowpass_hz: args.lowpass,
         resample_hz: args.resample,
     };
-    let learned = learn_from_file(&skill, &args.demo, &options, args.applied_force)?;
+    let dialect = Dialect {
+        delimiter: args.delimiter,
+        columns: args.columns.clone().unwrap_or_default(),
+    };
+    let learned = learn_from_demo(&skill, &args.demo, &dialect, &options, args.applied_force)?;
     let json = serde_json::to_string_pretty(&learned).map_err(|err| Failure::Usage(err.to_string()))? + "\n";
     atomic::write(&args.output, json.as_bytes())
         .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", args.output.display())))?;
@@ -211,27 +277,59 @@ pub struct RolloutArgs {
     /// Write the rollout here (CSV in the demonstration's columns) instead of standard output.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Move every motion goal by DX,DY,DZ metres (base frame).
-    #[arg(long, value_name = "DX,DY,DZ", value_delimiter = ',', allow_hyphen_values = true)]
+    /// Move every motion goal by DX,DY,DZ metres (base frame; each at most 10 m).
+    #[arg(long, value_name = "DX,DY,DZ", value_delimiter = ',', allow_hyphen_values = true, value_parser = limits::offset_m)]
     pub goal_offset: Option<Vec<f64>>,
-    /// Sample period \[s\].
-    #[arg(long, default_value_t = 0.001)]
+    /// Sample period in seconds (0.0001 to 1).
+    #[arg(long, default_value_t = 0.001, value_parser = limits::period_s)]
     pub dt: f64,
 }
 
+/// Most rows `skillc rollout` writes.
+const MAX_ROLLOUT_ROWS: f64 = 5e6;
+
 /// Runs `skillc rollout`: the kinematic rollout of every learned motion in segment order.
-pub fn rollout(args: &RolloutArgs) -> u8 {
+pub fn rollout(args: &RolloutArgs, verbosity: Verbosity) -> u8 {
     let run = || -> Result<(), Failure> {
-        if !(args.dt > 0.0 && args.dt.is_finite()) {
-            return Err(Failure::Usage("--dt must be a positive number of seconds".into()));
+        let dt = limits::check("--dt", args.dt, limits::PERIOD_S, " s").map_err(Failure::Usage)?;
+        if let Some(path) = &args.output {
+            atomic::refuse_inputs(path, "-o", &[&args.learned]).map_err(Failure::Usage)?;
         }
         let learned = read_learned(&args.learned)?;
+        let rows: f64 = learned
+            .motions
+            .values()
+            .map(|m| (m.position.tau_s / dt).ceil() + 1.0)
+            .sum();
+        if rows > MAX_ROLLOUT_ROWS {
+            return Err(Failure::Usage(format!(
+                "a rollout of `{}` at --dt {dt} s would write {rows:.0} rows, at most {MAX_ROLLOUT_ROWS:.0}: choose a larger --dt",
+                args.learned.display()
+            )));
+        }
         let offset = match args.goal_offset.as_deref() {
             Some([dx, dy, dz]) => nalgebra::Vector3::new(*dx, *dy, *dz),
             Some(_) => return Err(Failure::Usage("--goal-offset takes three numbers: DX,DY,DZ".into())),
             None => nalgebra::Vector3::zeros(),
         };
-        let (samples, _) = skill_runtime::skill::rollout::preview(&learned, args.dt, offset);
+        for value in offset.iter() {
+            limits::check("--goal-offset", *value, (-limits::OFFSET_M, limits::OFFSET_M), " m")
+                .map_err(Failure::Usage)?;
+        }
+        let (samples, _) = skill_runtime::skill::rollout::preview(&learned, dt, offset);
+        let finite = |s: &skill_runtime::skill::rollout::PreviewSample| {
+            s.position_m
+                .iter()
+                .chain(s.orientation.coords.iter())
+                .all(|v| v.is_finite())
+        };
+        if let Some(bad) = samples.iter().find(|s| !finite(s)) {
+            return Err(Failure::Input(format!(
+                "the rollout of `{}` diverges (not finite at {:.3} s); nothing written",
+                args.learned.display(),
+                bad.t_s
+            )));
+        }
         let mut text = String::from("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n");
         for sample in &samples {
             let q = sample.orientation.quaternion();
@@ -246,11 +344,13 @@ pub fn rollout(args: &RolloutArgs) -> u8 {
             Some(path) => {
                 atomic::write(path, text.as_bytes())
                     .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
-                eprintln!("wrote `{}` ({} samples)", path.display(), samples.len());
+                if !verbosity.quiet() {
+                    eprintln!("wrote `{}` ({} samples)", path.display(), samples.len());
+                }
+                Ok(())
             }
-            None => print!("{text}"),
+            None => out::print(&text),
         }
-        Ok(())
     };
     match run() {
         Ok(()) => 0,

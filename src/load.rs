@@ -5,19 +5,23 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use skill_runtime::demo::{negate_wrench, read_csv, stores_applied_force, ReadOptions};
-use skill_runtime::sim::Scene;
-use skill_runtime::skill::{learn_skill, LearnOptions, Learned};
+use skill_runtime::demo::{negate_wrench, read_csv_as, stores_applied_force, DemoError, Dialect, ReadOptions};
+use skill_runtime::sim::{Scene, SceneError};
+use skill_runtime::skill::validate::InvalidLearned;
+use skill_runtime::skill::{learn_skill, LearnOptions, Learned, LEARNED_VERSION};
 
-use crate::{frontend, render};
+use crate::{frontend, limits, render};
 
-/// Why a command failed: a problem with the input (exit 1) or with usage or IO (exit 2).
+/// Why a command failed: a problem with the input (exit 1) or with usage or IO (exit 2), or
+/// standard output was closed by its reader (exit 0, nothing to say: `skillc ... | head`).
 #[derive(Debug)]
 pub enum Failure {
     /// Exit 1.
     Input(String),
     /// Exit 2.
     Usage(String),
+    /// Exit 0, no message: the reader of standard output went away.
+    Closed,
 }
 
 impl Failure {
@@ -32,16 +36,21 @@ impl Failure {
                 eprintln!("error: {message}");
                 2
             }
+            Failure::Closed => 0,
         }
     }
 }
 
-/// An error and its sources on one line: `a: b: c`.
+/// An error and its sources on one line: `a: b: c`. A source whose text the message already
+/// holds (thiserror messages that print their `source`) is not repeated.
 pub fn error_chain(err: &dyn std::error::Error) -> String {
     let mut text = err.to_string();
     let mut source = err.source();
     while let Some(inner) = source {
-        let _ = write!(text, ": {inner}");
+        let part = inner.to_string();
+        if !text.contains(&part) {
+            let _ = write!(text, ": {part}");
+        }
         source = inner.source();
     }
     text
@@ -100,9 +109,73 @@ pub fn learn_from_file(
     options: &LearnOptions,
     applied_force: bool,
 ) -> Result<Learned, Failure> {
-    let min_samples = (skill.learn.segments as usize * 5).max(10);
-    let mut loaded =
-        read_csv(demo_path, &ReadOptions { min_samples }).map_err(|err| Failure::Input(error_chain(&err)))?;
+    learn_from_demo(skill, demo_path, &Dialect::default(), options, applied_force)
+}
+
+/// Like [`learn_from_file`], reading the CSV in `dialect` (separator, column names). Every number
+/// that sizes the work is bounded first (the template's `resample`, `lowpass` and `expect`, the
+/// demonstration's duration and resampled length), and the result is validated before it is
+/// returned, so nothing unusable is ever written.
+pub fn learn_from_demo(
+    skill: &skill_ir::Skill,
+    demo_path: &Path,
+    dialect: &Dialect,
+    options: &LearnOptions,
+    applied_force: bool,
+) -> Result<Learned, Failure> {
+    let plan = &skill.learn;
+    let name = &skill.name;
+    if plan.segments > limits::SEGMENTS {
+        return Err(Failure::Input(format!(
+            "skill `{name}` expects {} segments (`expect {}`); at most {} are supported",
+            plan.segments,
+            plan.segments,
+            limits::SEGMENTS
+        )));
+    }
+    for (field, value) in [("resample", plan.resample_hz), ("lowpass", plan.lowpass_hz)] {
+        if let Some(value) = value {
+            limits::check(&format!("`{field}` of skill `{name}`"), value, limits::RATE_HZ, " Hz")
+                .map_err(Failure::Input)?;
+        }
+    }
+    for (flag, value) in [("--resample", options.resample_hz), ("--lowpass", options.lowpass_hz)] {
+        if let Some(value) = value {
+            limits::check(flag, value, limits::RATE_HZ, " Hz").map_err(Failure::Usage)?;
+        }
+    }
+    let mut loaded = read_csv_as(demo_path, &ReadOptions::default(), dialect).map_err(|err| match &err {
+        // A file that cannot be read is an IO error; one that is not UTF-8 text is bad input.
+        DemoError::Io { source, .. } if source.kind() != std::io::ErrorKind::InvalidData => {
+            Failure::Usage(error_chain(&err))
+        }
+        _ => Failure::Input(error_chain(&err)),
+    })?;
+    let file = demo_path.display();
+    let samples = loaded.demo.len();
+    let needed = (plan.segments as usize * 5).max(10);
+    if samples < needed {
+        return Err(Failure::Input(format!(
+            "skill `{name}` expects {} segment(s) (`expect {}`), which needs at least {needed} samples; `{file}` has {samples}",
+            plan.segments, plan.segments
+        )));
+    }
+    let duration = loaded.demo.duration_s();
+    if duration > limits::DEMO_S {
+        return Err(Failure::Input(format!(
+            "`{file}` lasts {duration:e} s, at most {} s are supported: is its `t` column in seconds?",
+            limits::DEMO_S
+        )));
+    }
+    if let Some(rate) = options.resample_hz.or(plan.resample_hz) {
+        let resampled = duration * rate;
+        if resampled > limits::SAMPLES {
+            return Err(Failure::Input(format!(
+                "resampling `{file}` ({duration:.1} s) at {rate} Hz would make {resampled:.0} samples, at most {:.0}",
+                limits::SAMPLES
+            )));
+        }
+    }
     let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
     if applied_force {
         negate_wrench(&mut loaded.demo);
@@ -112,26 +185,70 @@ pub fn learn_from_file(
                 .to_string(),
         );
     }
-    learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| Failure::Input(error_chain(&err)))
+    let learned =
+        learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| Failure::Input(error_chain(&err)))?;
+    learned.validate().map_err(|err| {
+        Failure::Input(format!(
+            "what skill `{name}` learned from `{file}` is unusable, so nothing is written: {err} (are the demonstration's values in metres, newtons and seconds?)"
+        ))
+    })?;
+    Ok(learned)
 }
 
-/// Reads a learned file.
+/// Learned files larger than this are refused before reading, in bytes.
+const MAX_LEARNED_BYTES: u64 = 256 << 20;
+
+/// Reads a learned file and validates it ([`Learned::validate`]): the version first (a file of
+/// another version says to learn it again), then every number and array.
 pub fn read_learned(path: &Path) -> Result<Learned, Failure> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
-    serde_json::from_str(&text).map_err(|err| {
+    let file = path.display();
+    let cannot_read = |err: std::io::Error| Failure::Usage(format!("cannot read `{file}`: {err}"));
+    let meta = std::fs::metadata(path).map_err(cannot_read)?;
+    if meta.is_file() && meta.len() > MAX_LEARNED_BYTES {
+        return Err(Failure::Input(format!(
+            "`{file}` is {} MB, larger than any learned file ({} MB at most)",
+            meta.len() >> 20,
+            MAX_LEARNED_BYTES >> 20
+        )));
+    }
+    let text = std::fs::read_to_string(path).map_err(cannot_read)?;
+    let not_learned = |err: serde_json::Error| {
         Failure::Input(format!(
-            "`{}` is not a learned file: {err} (line {}, column {})",
-            path.display(),
+            "`{file}` is not a learned file: {err} (line {}, column {})",
             err.line(),
             err.column()
         ))
-    })
+    };
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(not_learned)?;
+    match value.get("learned_version").map(serde_json::Value::as_u64) {
+        None => {
+            return Err(Failure::Input(format!(
+                "`{file}` is not a learned file: it has no `learned_version` (write one with `skillc learn`)"
+            )))
+        }
+        Some(Some(version)) if version == u64::from(LEARNED_VERSION) => {}
+        Some(found) => {
+            let err = InvalidLearned::Version {
+                found: found.unwrap_or(u64::MAX),
+                supported: LEARNED_VERSION,
+            };
+            return Err(Failure::Input(format!("`{file}`: {err}")));
+        }
+    }
+    let learned: Learned = serde_json::from_value(value)
+        .map_err(|err| Failure::Input(format!("`{file}` is not a learned file: {err}")))?;
+    learned
+        .validate()
+        .map_err(|err| Failure::Input(format!("`{file}` is not a usable learned file: {err}")))?;
+    Ok(learned)
 }
 
 /// Loads a scene and applies `KEY=VALUE` overrides.
 pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
-    let mut scene = Scene::from_file(path).map_err(|err| Failure::Input(error_chain(&err)))?;
+    let mut scene = Scene::from_file(path).map_err(|err| match err {
+        SceneError::Io { .. } => Failure::Usage(error_chain(&err)),
+        _ => Failure::Input(error_chain(&err)),
+    })?;
     for set in sets {
         let Some((key, value)) = set.split_once('=') else {
             return Err(Failure::Usage(format!(

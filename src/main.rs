@@ -3,6 +3,7 @@
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
+    skillc::out::install_print_panic_backstop();
     let cli = skillc::Cli::parse();
     skillc::run(cli)
 }

@@ -1,9 +1,11 @@
-//! `skillc robot URDF \[--tool LINK\] \[--q Q1,...,Qn\] \[--json\]`: inspect a robot description.
+//! `skillc robot URDF [--tool LINK] [--q Q1,...,Qn] [--json]`: inspect a robot description.
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
-use skill_runtime::robot::Robot;
+use skill_runtime::robot::{Robot, RobotError};
+
+use crate::load::{error_chain, Failure};
+use crate::out;
 
 /// Print a robot's chain (joints, axes, limits, masses) and, at a configuration, the tool pose,
 /// the tool Jacobian and the gravity torques.
@@ -22,16 +24,34 @@ pub struct RobotArgs {
     pub json: bool,
 }
 
-/// Runs `skillc robot`, printing to stdout.
-pub fn run(args: &RobotArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let robot = Robot::from_urdf_file(&args.urdf, args.tool.as_deref())?;
-    let inspection = robot.inspect(args.q.as_deref())?;
-    let text = if args.json {
-        serde_json::to_string_pretty(&inspection)? + "\n"
+/// Runs `skillc robot`, printing to stdout; the exit code.
+pub fn run(args: &RobotArgs) -> u8 {
+    match inspect(args).and_then(|text| out::print(&text)) {
+        Ok(()) => 0,
+        Err(failure) => failure.report(),
+    }
+}
+
+/// A file that cannot be read is an IO error (exit 2); what it says is the input's problem
+/// (exit 1), as under `skillc run`.
+fn failure(err: &RobotError) -> Failure {
+    match err {
+        RobotError::Io { .. } => Failure::Usage(error_chain(err)),
+        _ => Failure::Input(error_chain(err)),
+    }
+}
+
+fn inspect(args: &RobotArgs) -> Result<String, Failure> {
+    let robot = Robot::from_urdf_file(&args.urdf, args.tool.as_deref()).map_err(|err| failure(&err))?;
+    let inspection = robot.inspect(args.q.as_deref()).map_err(|err| match err {
+        RobotError::WrongDof { .. } | RobotError::NonFinite { .. } => Failure::Usage(error_chain(&err)),
+        _ => failure(&err),
+    })?;
+    if args.json {
+        serde_json::to_string_pretty(&inspection)
+            .map(|json| json + "\n")
+            .map_err(|err| Failure::Usage(format!("cannot serialise the inspection: {err}")))
     } else {
-        inspection.to_text()
-    };
-    // Write errors (a closed pipe) become an error, not a panic as `println!` would.
-    std::io::stdout().lock().write_all(text.as_bytes())?;
-    Ok(())
+        Ok(inspection.to_text())
+    }
 }

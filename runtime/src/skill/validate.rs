@@ -195,7 +195,7 @@ fn config_ok(field: &str, config: &DmpConfig, basis: &Basis, tau_s: f64) -> Resu
         .validate()
         .map_err(|err| bad(format!("{field}.config"), format!("is invalid: {err}")))?;
     let n = basis.centers.len();
-    if n < 2 || n > MAX_BASIS {
+    if !(2..=MAX_BASIS).contains(&n) {
         return Err(bad(
             format!("{field}.basis.centers"),
             format!("has {n} basis function(s), between 2 and {MAX_BASIS} are needed"),

@@ -1,0 +1,86 @@
+//! Bounds on every number a user gives that sizes work or memory, checked before it is used:
+//! clap value parsers for flags, and checks with a message naming the field for values that come
+//! from files (a template's `resample`, a demonstration's duration).
+//!
+//! The bounds are generous for real use (a contact skill lasts seconds, sensors sample at most a
+//! few kHz) and keep the worst case to seconds of work and tens of megabytes.
+
+/// Rates for resampling and low-pass cut-offs \[Hz\].
+pub const RATE_HZ: (f64, f64) = (0.1, 10_000.0);
+/// Speed and force factors (`--speed`, `--force-scale`).
+pub const FACTOR: (f64, f64) = (0.01, 100.0);
+/// Sample periods (`rollout --dt`) \[s\].
+pub const PERIOD_S: (f64, f64) = (1e-4, 1.0);
+/// Each component of an offset (`--goal-offset`) \[m\].
+pub const OFFSET_M: f64 = 10.0;
+/// Longest demonstration \[s\] (the learned motions' longest duration too).
+pub const DEMO_S: f64 = skill_runtime::skill::validate::MAX_TAU_S;
+/// Most samples a demonstration may have after resampling.
+pub const SAMPLES: f64 = 2e6;
+/// Most segments a template may expect.
+pub const SEGMENTS: u32 = 1000;
+
+/// `value` (named `name` in the message) within `[min, max]`.
+pub fn check(name: &str, value: f64, (min, max): (f64, f64), unit: &str) -> Result<f64, String> {
+    if !value.is_finite() {
+        return Err(format!("{name} must be a finite number, not {value}"));
+    }
+    if !(min..=max).contains(&value) {
+        return Err(format!(
+            "{name} is {}{unit}; it must lie between {min}{unit} and {max}{unit}",
+            number(value)
+        ));
+    }
+    Ok(value)
+}
+
+/// `value` as people read it: plain for ordinary magnitudes, in exponent form otherwise.
+fn number(value: f64) -> String {
+    if value != 0.0 && !(1e-3..1e6).contains(&value.abs()) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
+fn parse(text: &str) -> Result<f64, String> {
+    text.trim()
+        .parse::<f64>()
+        .map_err(|_| format!("`{text}` is not a number"))
+}
+
+/// Clap parser for a rate in Hz (`--resample`, `--lowpass`).
+pub fn rate_hz(text: &str) -> Result<f64, String> {
+    check("the rate", parse(text)?, RATE_HZ, " Hz")
+}
+
+/// Clap parser for a speed or force factor (`--speed`, `--force-scale`).
+pub fn factor(text: &str) -> Result<f64, String> {
+    check("the factor", parse(text)?, FACTOR, "")
+}
+
+/// Clap parser for a sample period in seconds (`--dt`).
+pub fn period_s(text: &str) -> Result<f64, String> {
+    check("the period", parse(text)?, PERIOD_S, " s")
+}
+
+/// Clap parser for one offset component in metres (`--goal-offset`, comma separated).
+pub fn offset_m(text: &str) -> Result<f64, String> {
+    check("the offset", parse(text)?, (-OFFSET_M, OFFSET_M), " m")
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn absurd_values_are_refused_with_their_value() {
+        assert_eq!(super::rate_hz("100"), Ok(100.0));
+        assert!(super::rate_hz("1.9e7").unwrap_err().contains("1.9"));
+        assert!(super::factor("1e-12").is_err());
+        assert!(super::factor("1e300").is_err());
+        assert!(super::factor("inf").unwrap_err().contains("finite"));
+        assert!(super::period_s("1e-9").is_err());
+        assert!(super::offset_m("nan").is_err());
+        assert!(super::offset_m("1e308").is_err());
+        assert!(super::offset_m("abc").unwrap_err().contains("not a number"));
+    }
+}

@@ -216,6 +216,7 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
             (skill.name.clone(), binds.map(|()| (skill, learned)))
         }
         Err(Failure::Input(message) | Failure::Usage(message)) => (fallback_name, Err(message)),
+        Err(Failure::Closed) => (fallback_name, Err("standard output closed".to_string())),
     };
     Prepared {
         name,
@@ -270,6 +271,7 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
     let scene = match load_scene(&prepared.base_dir.join(&prepared.spec.scene), &variant.set) {
         Ok(scene) => scene,
         Err(Failure::Input(message) | Failure::Usage(message)) => return failed(message),
+        Err(Failure::Closed) => return failed("standard output closed".to_string()),
     };
     let mode = if job.replay {
         Mode::Replay(bound.learned)

@@ -182,6 +182,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
             result.reproduction = Some(format!("cannot build the table scene: {m}"));
             return result;
         }
+        Err(Failure::Closed) => return result,
     };
     let bound = match bind(skill, &learned) {
         Ok(bound) => bound,

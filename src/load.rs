@@ -185,8 +185,15 @@ pub fn learn_from_demo(
                 .to_string(),
         );
     }
-    let learned =
-        learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| Failure::Input(error_chain(&err)))?;
+    let learned = learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| {
+        let message = error_chain(&err);
+        let file = file.to_string();
+        if message.contains(&file) {
+            Failure::Input(message)
+        } else {
+            Failure::Input(format!("learning skill `{name}` from `{file}`: {message}"))
+        }
+    })?;
     learned.validate().map_err(|err| {
         Failure::Input(format!(
             "what skill `{name}` learned from `{file}` is unusable, so nothing is written: {err} (are the demonstration's values in metres, newtons and seconds?)"

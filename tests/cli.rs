@@ -474,3 +474,76 @@ fn eval_real_learns_from_a_folder_of_demonstrations_and_scores_the_segmentation(
     );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn completions_man_page_and_help_texts() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let out = skillc(&["completions", shell]);
+        assert_eq!(out.status.code(), Some(0), "{shell}");
+        assert!(String::from_utf8_lossy(&out.stdout).contains("skillc"), "{shell}");
+    }
+    let out = skillc(&["man"]);
+    assert_eq!(out.status.code(), Some(0));
+    let page = String::from_utf8_lossy(&out.stdout);
+    assert!(page.contains(".TH skillc 1"), "{page}");
+    let dir = temp_dir("man");
+    let out = skillc(&["--quiet", "man", "--out", dir.to_str().expect("utf8")]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.stderr.is_empty(), "quiet");
+    for page in ["skillc.1", "skillc-learn.1", "skillc-run.1", "skillc-eval.1"] {
+        assert!(dir.join(page).exists(), "{page}");
+    }
+    std::fs::remove_dir_all(&dir).expect("clean up");
+    for verb in [
+        "check", "compile", "graph", "fmt", "learn", "rollout", "run", "eval", "robot", "demos", "dump",
+    ] {
+        let out = skillc(&[verb, "--help"]);
+        assert_eq!(out.status.code(), Some(0), "{verb}");
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            !help.contains("\\["),
+            "`skillc {verb} --help` shows an escaped bracket:\n{help}"
+        );
+        assert!(
+            help.contains("--quiet") && help.contains("--verbose"),
+            "global flags in {verb}"
+        );
+    }
+}
+
+#[test]
+fn learn_reads_other_separators_and_column_names() {
+    let dir = temp_dir("dialect");
+    let demo = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/demos/touch.csv"))
+        .expect("shipped demo");
+    let mut lines = demo.lines();
+    let header = lines
+        .next()
+        .expect("header")
+        .replace("t,px,py,pz", "time,x_pos,y_pos,z_pos");
+    let mut text = format!("\u{feff}{}\r\n", header.replace(',', "\t"));
+    for line in lines {
+        let quoted: Vec<String> = line.split(',').map(|f| format!("\"{f}\"")).collect();
+        text.push_str(&quoted.join("\t"));
+        text.push_str("\r\n");
+    }
+    let demo_path = dir.join("touch.tsv");
+    std::fs::write(&demo_path, text).expect("write");
+    let learned = dir.join("touch.learned.json");
+    let args = [
+        "learn",
+        "stdlib-skills/touch.skill",
+        demo_path.to_str().expect("utf8"),
+        "-o",
+        learned.to_str().expect("utf8"),
+    ];
+    let out = skillc(&args);
+    assert_eq!(out.status.code(), Some(1), "x_pos is not a known spelling");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("lacks column(s) `px`, `py`, `pz`"));
+    let mut mapped = args.to_vec();
+    mapped.extend(["--columns", "px=x_pos,py=y_pos,z_pos=pz", "--delimiter", "tab"]);
+    let out = skillc(&mapped);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(learned.exists());
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

@@ -3,7 +3,7 @@
 //! (directories, FIFOs, sockets, block devices) refused; and the check that an output is not
 //! one of the command's inputs.
 //!
-//! What [`write`] does with an output path:
+//! What [`write()`] does with an output path:
 //!
 //! - a regular file, or nothing yet: a temporary file beside it, then a rename over it, so a
 //!   reader never sees a half-written output (an existing file's permissions are kept);

@@ -44,18 +44,39 @@ pub struct RunArgs {
     #[arg(long)]
     pub replay: bool,
     /// Multiply every desired force and force threshold.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::factor)]
     pub force_scale: f64,
     /// Multiply the motion speed.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::factor)]
     pub speed: f64,
+    /// Tighten or loosen a safety limit, in SI units, e.g. `--limit force=60` (N),
+    /// `--limit speed=0.1` (m/s); `inf` switches a check off. Names: force, moment, speed,
+    /// angular_speed, joint_margin, joint_speed, saturation, tracking, tracking_angle (repeatable).
+    #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = parse_limit)]
+    pub limits: Vec<(String, f64)>,
+}
+
+/// Parses `NAME=VALUE` for `--limit`, checking the name and that the value is positive.
+pub fn parse_limit(text: &str) -> Result<(String, f64), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: write NAME=VALUE, e.g. force=60"))?;
+    let value: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}`: `{value}` is not a number"))?;
+    let mut probe = skill_runtime::safety::Limits::for_skill(0.0, None);
+    probe.set(name.trim(), value).map_err(|err| err.to_string())?;
+    Ok((name.trim().to_string(), value))
 }
 
 /// Runs `skillc run`.
 pub fn run(args: &RunArgs) -> u8 {
     match run_inner(args) {
         Ok((report, text)) => {
-            print!("{text}");
+            if let Err(code) = crate::out::print_or_code(&text) {
+                return code;
+            }
             match report.outcome {
                 skill_ir::Outcome::Success => 0,
                 skill_ir::Outcome::Failure => 1,
@@ -66,8 +87,11 @@ pub fn run(args: &RunArgs) -> u8 {
 }
 
 fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
-    if !(args.force_scale > 0.0 && args.speed > 0.0) {
-        return Err(Failure::Usage("--force-scale and --speed must be positive".to_string()));
+    if let Some(out) = &args.output {
+        let mut inputs: Vec<&std::path::Path> = vec![&args.file, &args.scene];
+        inputs.extend(args.learned.as_deref());
+        inputs.extend(args.demo.as_deref());
+        atomic::refuse_inputs(out, "-o", &inputs).map_err(Failure::Usage)?;
     }
     if args.skill.is_none() {
         let compilation = crate::frontend::compile_path(&args.file).map_err(|err| Failure::Usage(err.to_string()))?;
@@ -102,6 +126,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
             speed_factor: args.speed,
             goal_offset_m: [0.0; 3],
         },
+        limits: args.limits.clone(),
         ..ExecOptions::default()
     };
     let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
@@ -226,6 +251,12 @@ fn summary_under(heading: &str, report: &RunReport, log: &RunLog) -> String {
             visit.state, visit.enter_s, visit.exit_s, stat.mean_n, stat.max_n, error
         );
     }
+    let safety = &report.safety;
+    let _ = writeln!(
+        out,
+        "  safety: peak force {:.1} N, peak tool speed {:.3} m/s, smallest joint margin {:.3} rad, {:.3} s at a torque limit",
+        safety.peak_force_n, safety.peak_tool_speed_mps, safety.min_joint_margin_rad, safety.torque_limit_s
+    );
     let status = match report.outcome {
         skill_ir::Outcome::Success => "success",
         skill_ir::Outcome::Failure => "FAILURE",
@@ -284,8 +315,16 @@ fn run_task(
         .collect::<Result<_, _>>()?;
     let steps = bind_all(&task.steps, &prepared)?;
     let fallbacks = bind_all(&task.fallbacks, &prepared_fallbacks)?;
-    let run = simulate_task(&scene, &steps, &fallbacks, &ExecOptions::default())
-        .map_err(|err| Failure::Input(error_chain(&err)))?;
+    let run = simulate_task(
+        &scene,
+        &steps,
+        &fallbacks,
+        &ExecOptions {
+            limits: args.limits.clone(),
+            ..ExecOptions::default()
+        },
+    )
+    .map_err(|err| Failure::Input(error_chain(&err)))?;
     if let Some(path) = &args.output {
         atomic::write(path, run.to_csv().as_bytes())
             .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
@@ -316,6 +355,8 @@ fn run_task(
         message: String::new(),
         visits: Vec::new(),
         duration_s: 0.0,
+        reflex: None,
+        safety: Default::default(),
     });
     Ok((RunReport { outcome, ..last }, text))
 }

@@ -520,12 +520,9 @@ fn robot_and_demos_report_bad_inputs_with_the_right_code() {
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
-/// Cases in `skillc run` and the simulator that are owned elsewhere: run them with
-/// `cargo test --test adversarial -- --ignored` until `run` bounds `--speed`/`--force-scale`
-/// (`limits::factor`), refuses `-o` naming an input (`atomic::refuse_inputs`) and scenes refuse
-/// absurd sizes.
+/// `skillc run` bounds `--speed`/`--force-scale`, refuses `-o` naming an input, and scenes
+/// refuse absurd sizes.
 #[test]
-#[ignore = "needs run_cmd to use limits::factor and atomic::refuse_inputs, and scene size bounds"]
 fn run_bounds_its_factors_and_never_overwrites_the_scene() {
     let dir = workspace("run");
     learned(&dir);
@@ -629,7 +626,7 @@ fn scenes_that_cannot_be_read_are_io_errors_named_once() {
 
 /// Files that still print with `print!`/`println!` (their owner routes them through
 /// `skillc::out::print`); the backstop in `main` keeps them from panicking meanwhile.
-const PRINTING: [&str; 2] = ["src/eval/mod.rs", "src/run_cmd.rs"];
+const PRINTING: [&str; 0] = [];
 
 /// Whether `line` calls `mac` itself (not `eprintln!` for `println!`).
 fn calls(line: &str, mac: &str) -> bool {

@@ -54,6 +54,17 @@ fn run(
     (report, log, metrics)
 }
 
+/// The shipped scenes' start with the tool 5 cm higher (found by inverse kinematics): scenes whose
+/// objects move towards the robot must not start with the tool inside them.
+const Q0_HIGHER: &str = "robot.q0=[0.0, -0.454318493, 0.0, 1.431100155, 0.0, -1.256174005, 0.0]";
+
+/// The eval's peak bound: twice the demonstration's largest force plus 5 N.
+fn peak_bound(skill: &str) -> f64 {
+    let demo = root().join(format!("examples/demos/{skill}.csv"));
+    let loaded = skill_runtime::demo::read_csv(&demo, &Default::default()).expect("demo reads");
+    2.0 * loaded.demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max) + 5.0
+}
+
 fn assert_sane(log: &RunLog) {
     let robot = skill_runtime::robot::Robot::from_urdf_str(skill_runtime::robot::LWR4_URDF, None).expect("urdf");
     for tick in &log.ticks {
@@ -93,6 +104,11 @@ fn slide_holds_the_learned_force_on_lowered_tables_where_replay_loses_contact() 
         );
         assert!(rms <= 0.10, "{set}: force RMS {rms}");
         assert!(share >= 0.95, "{set}: contact share {share}");
+        assert!(
+            metrics.peak_force_n <= peak_bound("slide"),
+            "{set}: peak {}",
+            metrics.peak_force_n
+        );
         assert_sane(&log);
         if lowered {
             let (_, _, replay) = run(&skill, &learned, "table.toml", &[set], true);
@@ -106,12 +122,18 @@ fn slide_holds_the_learned_force_on_lowered_tables_where_replay_loses_contact() 
 fn touch_ends_at_the_learned_contact_force_in_cases_one_to_three() {
     let (skill, learned) = learned("touch");
     let learned_force = learned.forces["touch_force"].value_n().expect("a constant force");
-    for (case, set) in [
-        ("III nearer", "table.z=0.305"),
-        ("I as demonstrated", "table.z=0.275"),
-        ("II farther", "table.z=0.245"),
+    let bound = peak_bound("touch");
+    for (case, sets) in [
+        ("III nearer", &["table.z=0.305", Q0_HIGHER][..]),
+        ("I as demonstrated", &["table.z=0.275"][..]),
+        ("II farther", &["table.z=0.245"][..]),
     ] {
-        let (report, log, metrics) = run(&skill, &learned, "table.toml", &[set], false);
+        let (report, log, metrics) = run(&skill, &learned, "table.toml", sets, false);
+        assert!(
+            metrics.peak_force_n <= bound,
+            "case {case}: peak {} N over {bound} N",
+            metrics.peak_force_n
+        );
         assert_eq!(
             report.outcome,
             skill_ir::Outcome::Success,
@@ -134,11 +156,17 @@ fn touch_ends_at_the_learned_contact_force_in_cases_one_to_three() {
 #[test]
 fn press_tracks_the_learned_profile_with_the_button_nearer_and_farther() {
     let (skill, learned) = learned("press");
+    let bound = peak_bound("press");
     for (name, sets) in [
-        ("nearer", ["button.z=0.31", "base.z=0.22"]),
-        ("farther", ["button.z=0.27", "base.z=0.18"]),
+        ("nearer", &["button.z=0.31", "base.z=0.22", Q0_HIGHER][..]),
+        ("farther", &["button.z=0.27", "base.z=0.18"][..]),
     ] {
-        let (report, log, metrics) = run(&skill, &learned, "button.toml", &sets, false);
+        let (report, log, metrics) = run(&skill, &learned, "button.toml", sets, false);
+        assert!(
+            metrics.peak_force_n <= bound,
+            "{name}: peak {} N over {bound} N",
+            metrics.peak_force_n
+        );
         assert_eq!(report.outcome, skill_ir::Outcome::Success, "{name}: {}", report.message);
         let rms = metrics.force_rms_rel.expect("a contact phase");
         eprintln!(
@@ -146,7 +174,9 @@ fn press_tracks_the_learned_profile_with_the_button_nearer_and_farther() {
             rms * 100.0,
             metrics.peak_force_n
         );
-        assert!(rms <= 0.10, "{name}: force RMS {rms}");
+        // 15 %, as the eval's press criterion: the force loop crosses the button's travel at the
+        // force-axis speed limit (examples/eval/default.toml says why).
+        assert!(rms <= 0.15, "{name}: force RMS {rms}");
         assert_sane(&log);
     }
 }
@@ -216,4 +246,58 @@ fn the_example_task_runs_end_to_end() {
     ] {
         assert!(stdout.contains(step), "missing `{step}` in\n{stdout}");
     }
+}
+
+#[test]
+fn a_crossed_limit_is_a_reflex_that_names_the_state_line_quantity_and_values() {
+    let (skill, learned) = learned("press");
+    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]) else {
+        panic!("scene loads")
+    };
+    let bound = bind(&skill, &learned).expect("binds");
+    let options = ExecOptions {
+        limits: vec![("force".to_string(), 4.0)],
+        ..ExecOptions::default()
+    };
+    let (report, log) = simulate(&scene, Mode::Skill(&bound), &options).expect("runs");
+    assert_eq!(report.outcome, skill_ir::Outcome::Failure);
+    let violation = report.reflex.as_ref().expect("a reflex stopped the run");
+    assert_eq!(violation.quantity, skill_runtime::safety::Quantity::ContactForce);
+    assert!(violation.measured > 4.0 && violation.limit == 4.0);
+    for needle in [
+        "reflex stop in state `press`",
+        "press.skill:",
+        "contact force",
+        "above the limit 4.0000 N",
+        "--limit force=",
+    ] {
+        assert!(report.message.contains(needle), "`{}` lacks `{needle}`", report.message);
+    }
+    // The arm was stopped: the log ends with the reflex hold, the last ticks nearly at rest.
+    let reflex = log.states.iter().position(|s| s == "reflex").expect("a reflex state") as u32;
+    let tail: Vec<_> = log.ticks.iter().filter(|t| t.state == reflex).collect();
+    assert!(tail.len() >= 290, "{} reflex ticks", tail.len());
+    let last = tail[tail.len() - 1];
+    let before = tail[tail.len() - 11];
+    let moved = (0..3)
+        .map(|i| (last.measured[i] - before.measured[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(moved < 0.002, "still moving {moved} m in 10 ms after the stop");
+    assert!(report.safety.peak_force_n > 4.0);
+}
+
+#[test]
+fn a_tool_starting_inside_an_object_is_refused_with_the_object_named() {
+    let (skill, learned) = learned("touch");
+    let Ok(scene) = skillc::load::load_scene(
+        &root().join("examples/scenes/table.toml"),
+        &["table.z=0.305".to_string()],
+    ) else {
+        panic!("scene loads")
+    };
+    let bound = bind(&skill, &learned).expect("binds");
+    let err = simulate(&scene, Mode::Skill(&bound), &ExecOptions::default()).expect_err("starts inside the table");
+    let message = err.to_string();
+    assert!(message.contains("inside object `table`"), "{message}");
 }

@@ -101,8 +101,10 @@ fn sliding_over_the_drum_follows_its_curvature() {
             );
         }
     }
+    // The bug this guards against left a 5 mm gap. The contact is compliant (the scene's default
+    // 5e4 N/m stands for the arm's joint elasticity), so a ~10-20 N push sinks a few tenths of a mm.
     assert!(
-        worst_gap < 5e-4,
+        worst_gap < 1e-3,
         "the tool centre left the drum's offset surface by {worst_gap} m"
     );
     assert!(worst_jump < 2.0, "the contact force jumped {worst_jump} N in one step");

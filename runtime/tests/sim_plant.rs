@@ -275,8 +275,17 @@ fn button_bottoms_out_on_its_stop_and_the_sensor_reads_the_press() {
              sensed mean {sensed:.4} N, tip below the stop by at most {below_stop:.2e} m",
             tail[tail.len() - 1].depth
         );
-        assert!(depth_err < 0.0005, "{force_n} N: depth off the travel by {depth_err} m");
-        assert!(deepest < travel + 0.0005, "{force_n} N: pushed {deepest} m in");
+        // The stop is as compliant as every contact with a fixed object (the scene's stiffness):
+        // at rest the cap sits at its travel plus what the push compresses, F / k.
+        let give = force_n / scene.spec().sim.contact_stiffness;
+        assert!(
+            depth_err < 0.0005 + give,
+            "{force_n} N: depth off the travel by {depth_err} m"
+        );
+        assert!(
+            deepest < travel + 0.0005 + 2.0 * give,
+            "{force_n} N: pushed {deepest} m in"
+        );
         assert!(
             ideal_err < 0.02 * force_n,
             "{force_n} N: noise-free |f| off by up to {ideal_err} N"
@@ -285,12 +294,17 @@ fn button_bottoms_out_on_its_stop_and_the_sensor_reads_the_press() {
             (sensed - force_n).abs() < 0.02 * force_n,
             "{force_n} N: sensor reads {sensed} N"
         );
-        assert!(below_stop < 0.0005, "{force_n} N: tip {below_stop} m below the stop");
+        assert!(
+            below_stop < 0.0005 + 2.0 * give,
+            "{force_n} N: tip {below_stop} m below the stop"
+        );
     }
 }
 
+/// The static press test of the contact stiffness: a steady push sinks the tool by `F / k` (the
+/// scene's stiffness), within the spread of the arm's effective mass over the workspace.
 #[test]
-fn pressing_hard_on_fixed_boxes_does_not_sink_the_tool() {
+fn pressing_hard_on_fixed_boxes_sinks_the_tool_by_force_over_stiffness() {
     // The table (top at 0.300 m, the tip starts 1 mm above it) and button.toml's base box (top at
     // 0.250 m) with the button moved out of the way (the tip falls 5 cm onto the box first).
     let mut base = scene("button.toml");
@@ -303,8 +317,17 @@ fn pressing_hard_on_fixed_boxes_does_not_sink_the_tool() {
             .fold(f64::NEG_INFINITY, f64::max);
         let tail = &trace[4000..];
         let sensed = tail.iter().map(|s| s.sensed_n).sum::<f64>() / tail.len() as f64;
-        eprintln!("40 N on the {name}: deepest sink {sink:.2e} m, sensed mean {sensed:.4} N");
-        assert!(sink < 0.001, "{name}: the tip sank {sink} m");
+        let resting = tail.iter().map(|s| top + TIP_RADIUS - s.tip_z).sum::<f64>() / tail.len() as f64;
+        let expected = 40.0 / scene.spec().sim.contact_stiffness;
+        eprintln!(
+            "40 N on the {name}: resting sink {resting:.2e} m (F/k = {expected:.2e} m), deepest {sink:.2e} m, \
+             sensed mean {sensed:.4} N"
+        );
+        assert!(
+            (resting - expected).abs() < 0.35 * expected,
+            "{name}: the tip rests {resting} m deep, F/k is {expected} m"
+        );
+        assert!(sink < 5.0 * expected, "{name}: the tip sank {sink} m");
         assert!((sensed - 40.0).abs() < 0.4, "{name}: sensor reads {sensed} N");
     }
 }

@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use skill_runtime::demo::{read_csv, ReadOptions};
 use skill_runtime::exec::{bind, simulate, BoundSkill, ExecOptions, Mode, RunLog};
 use skill_runtime::skill::{LearnOptions, Learned};
 
@@ -48,6 +49,9 @@ pub struct EvalArgs {
     /// reproduce each on a table at the learned plane.
     #[arg(long, value_name = "DIR")]
     pub real: Option<PathBuf>,
+    /// Tighten or loosen a safety limit for every trial, e.g. `--limit force=60` (see `skillc run`).
+    #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = crate::run_cmd::parse_limit)]
+    pub limits: Vec<(String, f64)>,
 }
 
 /// A trials file.
@@ -89,7 +93,17 @@ pub struct Criteria {
     pub contact_share: Option<f64>,
     /// Largest relative error of the final contact force (touch).
     pub stop_force_rel: Option<f64>,
+    /// Largest peak contact force as `[a, b]`: at most `a × the demonstration's peak + b N`
+    /// (default `[2, 5]`, for every skill trial).
+    #[serde(default)]
+    pub peak_force: Option<[f64; 2]>,
 }
+
+/// The default [`Criteria::peak_force`]: twice the demonstrated peak plus 5 N.
+pub const DEFAULT_PEAK_BOUND: [f64; 2] = [2.0, 5.0];
+
+/// The version of `summary.json`'s layout; bumped on every change to its keys.
+pub const SUMMARY_VERSION: u32 = 2;
 
 /// A scene variant.
 #[derive(Debug, Clone, Deserialize)]
@@ -129,6 +143,17 @@ pub struct TrialResult {
     pub duration_s: f64,
     /// How the run ended, or why it could not run.
     pub message: String,
+    /// Why the trial failed, short and stable (`reflex:contact_force`, `criterion:force_rms`,
+    /// `criterion:peak_force`, `failure_state`, `error`, ...); `None` when it succeeded.
+    pub reason: Option<String>,
+    /// The peak force the trial was allowed \[N\] (skill trials).
+    pub peak_bound_n: Option<f64>,
+    /// Largest tool speed \[m/s\].
+    pub peak_tool_speed_mps: f64,
+    /// Smallest distance of a joint from its limits \[rad\].
+    pub min_joint_margin_rad: f64,
+    /// Time any joint torque was at its effort limit \[s\].
+    pub torque_limit_s: f64,
     /// Whether the trial could not run at all (bad input).
     pub error: bool,
     /// States visited with entry times, `state@t`.
@@ -139,6 +164,8 @@ pub struct TrialResult {
 struct Prepared {
     name: String,
     program_skill: Result<(skill_ir::Skill, Learned), String>,
+    /// The demonstration's largest force magnitude \[N\].
+    demo_peak_n: f64,
     spec: SkillTrials,
     base_dir: PathBuf,
 }
@@ -218,9 +245,13 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
         Err(Failure::Input(message) | Failure::Usage(message)) => (fallback_name, Err(message)),
         Err(Failure::Closed) => (fallback_name, Err("standard output closed".to_string())),
     };
+    let demo_peak_n = read_csv(&demo, &ReadOptions::default())
+        .map(|loaded| loaded.demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max))
+        .unwrap_or(0.0);
     Prepared {
         name,
         program_skill,
+        demo_peak_n,
         spec,
         base_dir: base_dir.to_path_buf(),
     }
@@ -242,7 +273,7 @@ fn bind_prepared(prepared: &Prepared) -> Bound<'_> {
     }
 }
 
-fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
+fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String, f64)]) -> Outcome {
     let variant = &prepared.spec.variants[job.variant];
     let mode_name = if job.replay { "replay" } else { "skill" };
     let failed = |message: String| Outcome {
@@ -259,6 +290,11 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
             goal_error_m: 0.0,
             duration_s: 0.0,
             message,
+            reason: Some("error".to_string()),
+            peak_bound_n: None,
+            peak_tool_speed_mps: 0.0,
+            min_joint_margin_rad: 0.0,
+            torque_limit_s: 0.0,
             error: true,
             states: Vec::new(),
         },
@@ -278,7 +314,11 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
     } else {
         Mode::Skill(bound)
     };
-    let (report, log) = match simulate(&scene, mode, &ExecOptions::default()) {
+    let options = ExecOptions {
+        limits: limits.to_vec(),
+        ..ExecOptions::default()
+    };
+    let (report, log) = match simulate(&scene, mode, &options) {
         Ok(done) => done,
         Err(err) => return failed(error_chain(&err)),
     };
@@ -286,18 +326,36 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
     let metrics: Metrics = metrics::measure(&log, plan, job.replay, &frame_z);
     let learned_force = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01).peak());
     let criteria = prepared.spec.criteria;
-    let mut success = job.replay || report.outcome == skill_ir::Outcome::Success;
-    if let Some(max) = criteria.force_rms_rel {
-        success &= metrics.force_rms_rel.is_some_and(|v| v <= max);
-    }
-    if let Some(min) = criteria.contact_share {
-        success &= metrics.contact_share.is_some_and(|v| v >= min);
-    }
-    if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
-        success &= metrics
+    let [scale, offset] = criteria.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
+    let peak_bound = (!job.replay).then_some(scale * prepared.demo_peak_n + offset);
+    // The first reason a trial fails, in order of gravity. Replays are the baseline: they are
+    // never a success, and their reason says why they would have failed.
+    let reason = if let Some(violation) = &report.reflex {
+        Some(format!("reflex:{}", violation.quantity.name()))
+    } else if report.outcome != skill_ir::Outcome::Success {
+        Some("failure_state".to_string())
+    } else if peak_bound.is_some_and(|bound| metrics.peak_force_n > bound) {
+        Some("criterion:peak_force".to_string())
+    } else if criteria
+        .force_rms_rel
+        .is_some_and(|max| !metrics.force_rms_rel.is_some_and(|v| v <= max))
+    {
+        Some("criterion:force_rms".to_string())
+    } else if criteria
+        .contact_share
+        .is_some_and(|min| !metrics.contact_share.is_some_and(|v| v >= min))
+    {
+        Some("criterion:contact_share".to_string())
+    } else if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
+        let met = metrics
             .stop_force_n
             .is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
-    }
+        (!met).then(|| "criterion:stop_force".to_string())
+    } else {
+        None
+    };
+    let success = !job.replay && reason.is_none();
+    let safety = &report.safety;
     Outcome {
         result: TrialResult {
             skill: prepared.name.clone(),
@@ -312,6 +370,11 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job) -> Outcome {
             goal_error_m: metrics.goal_error_m,
             duration_s: report.duration_s,
             message: report.message.clone(),
+            reason,
+            peak_bound_n: peak_bound,
+            peak_tool_speed_mps: safety.peak_tool_speed_mps,
+            min_joint_margin_rad: safety.min_joint_margin_rad,
+            torque_limit_s: safety.torque_limit_s,
             error: false,
             states: report
                 .visits
@@ -391,7 +454,7 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let outcomes: Vec<Outcome> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let outcome = run_job(&prepared[job.skill], &bound[job.skill], job);
+                let outcome = run_job(&prepared[job.skill], &bound[job.skill], job, &args.limits);
                 progress.inc(1);
                 outcome
             })
@@ -401,15 +464,14 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let elapsed = started.elapsed().as_secs_f64();
 
     let table = report::table(&outcomes);
-    print!("{table}");
-    println!("{} trials in {elapsed:.1} s", outcomes.len());
+    crate::out::print(&format!("{table}{} trials in {elapsed:.1} s\n", outcomes.len()))?;
     let real = match &args.real {
         Some(dir) => {
             let (_, slide) = load_skill(Path::new("stdlib-skills/slide.skill"), None)?;
             let results = pool
                 .install(|| real::evaluate(dir, &slide, Path::new("examples/scenes/table.toml")))
                 .map_err(Failure::Usage)?;
-            print!("{}", report::real_table(&results));
+            crate::out::print(&report::real_table(&results))?;
             results
         }
         None => Vec::new(),
@@ -423,9 +485,30 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
         &real,
     )
     .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
-    println!("report: {}", written.display());
-    let any_error = outcomes.iter().any(|o| o.result.error);
-    Ok(u8::from(any_error))
+    crate::out::print(&format!("report: {}\n", written.display()))?;
+    // A gate for CI: any skill trial that failed its criteria (or could not run) fails the eval.
+    let failed: Vec<&TrialResult> = outcomes
+        .iter()
+        .map(|o| &o.result)
+        .filter(|r| r.mode == "skill" && (r.error || !r.success))
+        .collect();
+    if !failed.is_empty() {
+        eprintln!(
+            "{} of {} skill trials failed:",
+            failed.len(),
+            outcomes.iter().filter(|o| o.result.mode == "skill").count()
+        );
+        for r in &failed {
+            eprintln!(
+                "  {} / {}: {} ({})",
+                r.skill,
+                r.variant,
+                r.reason.as_deref().unwrap_or("error"),
+                r.message
+            );
+        }
+    }
+    Ok(u8::from(!failed.is_empty()))
 }
 
 /// What the report needs of each prepared skill.

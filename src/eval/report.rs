@@ -21,7 +21,7 @@ pub(super) fn table(outcomes: &[Outcome]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8} {:>7} {:>7}",
+        "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8} {:>7} {:>7}  why",
         "skill", "variant", "mode", "ok", "F rms %", "contact %", "peak N", "stop N", "time s"
     );
     for outcome in outcomes {
@@ -33,9 +33,13 @@ pub(super) fn table(outcomes: &[Outcome]) -> String {
         } else {
             "no"
         };
+        let why = match (&r.reason, r.mode.as_str()) {
+            (Some(reason), _) if !r.error => reason.as_str(),
+            _ => "",
+        };
         let _ = writeln!(
             out,
-            "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8.1} {:>7} {:>7.2}",
+            "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8.1} {:>7} {:>7.2}  {why}",
             r.skill,
             truncate(&r.variant, 31),
             r.mode,
@@ -81,6 +85,7 @@ pub(super) fn write(
 ) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(out.join("plots"))?;
     let summary = serde_json::json!({
+        "format_version": super::SUMMARY_VERSION,
         "elapsed_s": elapsed_s,
         "threads": rayon::current_num_threads(),
         "trials": outcomes.iter().map(|o| &o.result).collect::<Vec<_>>(),

@@ -41,6 +41,63 @@ pub(super) struct Machine<'b, 'a> {
     force_profile: Option<DmpRollout>,
     extension: Option<Extension>,
     velocity: [f64; 3],
+    /// Guarded approach of the current state: near its motion's goal, where contact is expected,
+    /// the motion slows to a contact-safe speed.
+    guarded: Option<GuardedApproach>,
+    /// Time the current state's motion has run on its own clock \[s\] (slower than the run's
+    /// during a guarded approach): per-sample frames follow the motion, not the wall clock.
+    motion_clock_s: f64,
+}
+
+/// How a state that expects contact approaches it: within `zone_m` of its motion's goal (flange
+/// positions) the motion's time runs slower, so that the tool moves at most `speed_mps`.
+#[derive(Debug, Clone, Copy)]
+struct GuardedApproach {
+    zone_m: f64,
+    speed_mps: f64,
+}
+
+/// The contact-safe speed of a guarded approach without a search speed of its own \[m/s\]: the
+/// controller's force-axis speed limit, for the same reason (an impact at `v` peaks near `v √(k m)`).
+const GUARD_SPEED_MPS: f64 = 0.025;
+
+/// How far before the expected contact a guarded approach slows down when the state declares no
+/// search range \[m\] (scene changes of a few centimetres).
+const GUARD_ZONE_M: f64 = 0.03;
+
+/// The guarded approach of a state, if it waits for contact: a force guard on one of its
+/// transitions. Its search (`extend ... at V, up to D`) gives the speed and the zone; without
+/// one, [`GUARD_SPEED_MPS`] within [`GUARD_ZONE_M`].
+fn guarded_approach(skill: &ir::Skill, active: &ir::ActiveState) -> Option<GuardedApproach> {
+    active.motion?;
+    let mut expects_contact = false;
+    let mut search = None;
+    for id in &active.transitions {
+        let transition = &skill.transitions[id.index()];
+        expects_contact |= mentions_force(&transition.guard);
+        if let ir::TransitionAction::Extend { speed_mps, max_m, .. } = transition.action {
+            search = Some(GuardedApproach {
+                zone_m: max_m.max(GUARD_ZONE_M),
+                speed_mps: speed_mps.min(GUARD_SPEED_MPS),
+            });
+        }
+    }
+    expects_contact.then(|| {
+        search.unwrap_or(GuardedApproach {
+            zone_m: GUARD_ZONE_M,
+            speed_mps: GUARD_SPEED_MPS,
+        })
+    })
+}
+
+fn mentions_force(guard: &ir::Guard) -> bool {
+    match guard {
+        ir::Guard::And { all } => all.iter().any(mentions_force),
+        ir::Guard::Or { any } => any.iter().any(mentions_force),
+        ir::Guard::Not { guard } => mentions_force(guard),
+        ir::Guard::Force { .. } => true,
+        _ => false,
+    }
 }
 
 /// What guards see this tick.
@@ -80,6 +137,8 @@ impl<'b, 'a> Machine<'b, 'a> {
             force_profile: None,
             extension: None,
             velocity: [0.0; 3],
+            guarded: None,
+            motion_clock_s: 0.0,
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -109,9 +168,12 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.extension = None;
         self.motion = None;
         self.force_profile = None;
+        self.guarded = None;
+        self.motion_clock_s = 0.0;
         let flange = rig.flange();
         self.held = flange;
         let Some(active) = self.active() else { return Ok(()) };
+        self.guarded = guarded_approach(self.skill(), active);
         let speed = self.overrides.speed_factor;
         if let Some(motion_id) = active.motion {
             let learned = self.bound.motions[motion_id.index()];
@@ -184,7 +246,12 @@ impl<'b, 'a> Machine<'b, 'a> {
             ir::FrameRef::Tool => tool,
             ir::FrameRef::Learned(id) => {
                 let learned = self.bound.frames[id.index()];
-                let elapsed = self.time_in_state(t) * self.overrides.speed_factor;
+                let clock = if self.motion.is_some() {
+                    self.motion_clock_s
+                } else {
+                    self.time_in_state(t)
+                };
+                let elapsed = clock * self.overrides.speed_factor;
                 let pose = learned.at(elapsed);
                 match learned.kind().origin() {
                     crate::skill::FrameOrigin::Learned => pose,
@@ -318,7 +385,21 @@ impl<'b, 'a> Machine<'b, 'a> {
         }
         if let Some(motion) = &mut self.motion {
             let learned = self.bound.motions[motion.id];
-            motion.rollout.step(learned, dt);
+            // Guarded approach: near the goal, run the motion's clock slower (a DMP's time
+            // scaling), so the desired speed stays at the contact-safe speed.
+            // Not during a search: its goal moves at the search speed already.
+            let mut step = dt;
+            if let (Some(guard), None) = (self.guarded, &self.extension) {
+                let position = Vector3::from_column_slice(motion.rollout.position.position());
+                let goal = Vector3::from_column_slice(motion.rollout.position.goal());
+                motion.rollout.position.velocity_into(&mut self.velocity);
+                let speed = Vector3::from(self.velocity).norm();
+                if (goal - position).norm() < guard.zone_m && speed > guard.speed_mps {
+                    step = dt * guard.speed_mps / speed;
+                }
+            }
+            motion.rollout.step(learned, step);
+            self.motion_clock_s += step;
         }
         let profile_dmp =
             self.active()

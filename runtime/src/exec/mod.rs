@@ -20,6 +20,7 @@
 //! task in a scene's simulation).
 
 mod bind;
+mod limits;
 mod log;
 mod machine;
 mod motion;
@@ -28,6 +29,7 @@ mod run;
 mod session;
 
 pub use bind::{bind, BindError, BoundSkill};
+pub use limits::{learned_peak_force, learned_workspace, limits_for};
 pub use log::{RunLog, Tick};
 pub use rig::Rig;
 pub use run::{replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit};

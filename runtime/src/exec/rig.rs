@@ -9,6 +9,7 @@ use super::run::{ExecError, ExecOptions};
 use crate::control::{Command, HybridController};
 use crate::plant::{Observation, Plant};
 use crate::robot::RobotError;
+use crate::safety::{Limits, SafetyStats, Supervisor, REFLEX_HOLD_S};
 
 /// The robot side of a run: plant, controller, and the flange-to-tool transform.
 pub struct Rig<'p> {
@@ -17,6 +18,7 @@ pub struct Rig<'p> {
     /// The controller.
     pub controller: HybridController,
     flange_to_tool: Isometry3<f64>,
+    supervisor: Supervisor,
     obs: Observation,
     torques: Vec<f64>,
     t_s: f64,
@@ -42,10 +44,12 @@ impl<'p> Rig<'p> {
         robot.forward_kinematics(&mut data, obs.q.as_slice());
         let flange_to_tool = robot.link_in_base(&data, flange).inverse() * robot.tool_in_base(&data);
         let torques = vec![0.0; obs.q.len()];
+        let supervisor = Supervisor::new(robot, Limits::for_skill(0.0, None));
         Ok(Rig {
             plant,
             controller,
             flange_to_tool,
+            supervisor,
             obs,
             torques,
             t_s: 0.0,
@@ -67,6 +71,26 @@ impl<'p> Rig<'p> {
         &self.obs
     }
 
+    /// Sets the supervisor's limits for what runs next (statistics are kept).
+    pub fn set_limits(&mut self, limits: Limits) {
+        self.supervisor.set_limits(limits);
+    }
+
+    /// The limits in force.
+    pub fn limits(&self) -> &Limits {
+        self.supervisor.limits()
+    }
+
+    /// The safety figures since the last [`Rig::reset_safety_stats`].
+    pub fn safety_stats(&self) -> &SafetyStats {
+        self.supervisor.stats()
+    }
+
+    /// Starts the safety figures afresh (one run or task step each).
+    pub fn reset_safety_stats(&mut self) {
+        self.supervisor.reset_stats();
+    }
+
     pub(super) fn sense(&mut self) {
         self.plant.observe_into(&mut self.obs);
         self.controller.observe(&self.obs);
@@ -80,21 +104,37 @@ impl<'p> Rig<'p> {
         self.tool() * self.flange_to_tool.inverse()
     }
 
-    /// Computes and applies torques for `cmd`, steps the plant, and logs the tick.
+    /// Computes torques for `cmd`, has the supervisor check the tick, applies them, steps the
+    /// plant and logs the tick. A violation is a reflex: the arm is brought to a damped stop for
+    /// [`REFLEX_HOLD_S`] (logged as state `reflex`) and [`ExecError::Reflex`] ends the run.
     pub(super) fn act(
         &mut self,
         cmd: &Command,
         state: u32,
         state_name: &str,
-        log: Option<&mut RunLog>,
+        mut log: Option<&mut RunLog>,
         dt: f64,
     ) -> Result<(), ExecError> {
         let torques = self.controller.torques(&self.obs, cmd, dt);
         self.torques.copy_from_slice(torques);
-        if let Some(log) = log {
+        if let Some(log) = log.as_deref_mut() {
             log.ticks
                 .push(tick_record(self.t_s, state, cmd, &self.controller, &self.torques));
         }
+        let checked = self
+            .supervisor
+            .check(self.t_s, dt, &self.obs, self.controller.state(), cmd, &self.torques);
+        if let Err(violation) = checked {
+            self.reflex_stop(log, dt)?;
+            return Err(ExecError::Reflex {
+                state: state_name.to_string(),
+                violation: Box::new(violation),
+            });
+        }
+        self.apply_and_step(state_name, dt)
+    }
+
+    fn apply_and_step(&mut self, state_name: &str, dt: f64) -> Result<(), ExecError> {
         let t_s = self.t_s;
         let wrap = |source| ExecError::Plant {
             state: state_name.to_string(),
@@ -104,6 +144,33 @@ impl<'p> Rig<'p> {
         self.plant.apply(&self.torques).map_err(wrap)?;
         self.plant.step(dt).map_err(wrap)?;
         self.t_s += dt;
+        Ok(())
+    }
+
+    /// The reflex: gravity compensation and joint damping for [`REFLEX_HOLD_S`], whatever the
+    /// controller wanted. Logged as state `reflex`, the command shown as a hold where the tool is.
+    fn reflex_stop(&mut self, mut log: Option<&mut RunLog>, dt: f64) -> Result<(), ExecError> {
+        let state = log.as_deref_mut().map_or(0, |log| log.state_index("reflex"));
+        let steps = (REFLEX_HOLD_S / dt).round() as usize;
+        for step in 0..steps {
+            if step > 0 {
+                self.sense();
+            }
+            self.supervisor.stop_torques(&self.obs, &mut self.torques);
+            if let Some(log) = log.as_deref_mut() {
+                let tool = self.controller.state().tool;
+                let pose = if tool.translation.vector.iter().all(|v| v.is_finite()) {
+                    tool
+                } else {
+                    Isometry3::identity()
+                };
+                let hold = Command::hold(pose, [0.0; 6]);
+                log.ticks
+                    .push(tick_record(self.t_s, state, &hold, &self.controller, &self.torques));
+            }
+            self.apply_and_step("reflex", dt)?;
+        }
+        self.sense();
         Ok(())
     }
 

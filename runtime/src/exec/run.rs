@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 use skill_ir as ir;
 
 use super::bind::BoundSkill;
+use super::limits::{limits_for, reflex_message};
 use super::log::RunLog;
 use super::machine::{Machine, Sensed};
 use super::motion::{motion_start, motions_in_order, MotionRollout};
@@ -13,6 +14,7 @@ use super::rig::Rig;
 use crate::control::Command;
 use crate::plant::PlantError;
 use crate::robot::RobotError;
+use crate::safety::{SafetyStats, Violation};
 use crate::skill::Learned;
 
 /// How a run is carried out.
@@ -30,6 +32,9 @@ pub struct ExecOptions {
     pub log: bool,
     /// Stiffness of the replay baseline and of the pre-positioning move, per axis (N/m, N m/rad).
     pub replay_stiffness: [f64; 6],
+    /// Safety limits set by the user, applied in order over the defaults the learned file implies
+    /// (names as in [`crate::safety::Limits::set`], SI values).
+    pub limits: Vec<(String, f64)>,
 }
 
 impl Default for ExecOptions {
@@ -41,6 +46,7 @@ impl Default for ExecOptions {
             prepose: true,
             log: true,
             replay_stiffness: [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0],
+            limits: Vec::new(),
         }
     }
 }
@@ -73,6 +79,21 @@ pub enum ExecError {
         /// The DMP's complaint (which value was out of range).
         reason: String,
     },
+    /// A limit override that cannot be set (unknown name, not positive).
+    #[error("{reason}")]
+    Limits {
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The supervisor stopped the arm. `run_skill` and `run_replay` turn this into a failed
+    /// [`RunReport`]; callers of lower-level functions see it as an error.
+    #[error("reflex stop in `{state}`: {violation}")]
+    Reflex {
+        /// The state running when the limit was crossed.
+        state: String,
+        /// What was crossed.
+        violation: Box<Violation>,
+    },
 }
 
 /// A time in one state.
@@ -99,6 +120,10 @@ pub struct RunReport {
     pub visits: Vec<Visit>,
     /// Run time \[s\].
     pub duration_s: f64,
+    /// The limit whose crossing stopped the run, if one did.
+    pub reflex: Option<Violation>,
+    /// Peak force and speed, smallest joint margin, time at the torque limit.
+    pub safety: SafetyStats,
 }
 
 /// The name of the replay state that covers `segment` (0-based): `replay:<motion>` for the
@@ -131,24 +156,90 @@ fn prepose_for(
     Ok(())
 }
 
-/// Runs a bound skill on a rig until a terminal state (or the time limit).
+/// Runs a bound skill on a rig until a terminal state (or the time limit), under the
+/// supervisor with the limits [`limits_for`] gives (defaults from the learned file, then
+/// [`ExecOptions::limits`]). A reflex ends the run as a failure whose message names the time,
+/// the state and its `.skill` line, the quantity, the measured value and the limit.
 pub fn run_skill(
     bound: &BoundSkill<'_>,
     rig: &mut Rig<'_>,
     options: &ExecOptions,
+    log: Option<&mut RunLog>,
+) -> Result<RunReport, ExecError> {
+    let limits = limits_for(
+        bound.learned,
+        rig.flange_to_tool(),
+        options.overrides.force_scale,
+        &options.limits,
+    )
+    .map_err(|err| ExecError::Limits {
+        reason: err.to_string(),
+    })?;
+    rig.set_limits(limits);
+    rig.reset_safety_stats();
+    let start_s = rig.time_s();
+    let mut visits = Vec::new();
+    let result = skill_loop(bound, rig, options, log, &mut visits, start_s);
+    let location_of = |state: &str| {
+        bound
+            .skill
+            .states
+            .iter()
+            .find(|s| s.name == state)
+            .map(|s| location(&s.span))
+    };
+    finish(result, rig, visits, start_s, location_of)
+}
+
+/// Turns a run's result into its report: a reflex becomes a failure, the safety figures are added.
+fn finish(
+    result: Result<RunReport, ExecError>,
+    rig: &Rig<'_>,
+    mut visits: Vec<Visit>,
+    start_s: f64,
+    location_of: impl Fn(&str) -> Option<String>,
+) -> Result<RunReport, ExecError> {
+    let mut report = match result {
+        Ok(report) => report,
+        Err(ExecError::Reflex { state, violation }) => {
+            let duration_s = rig.time_s() - start_s;
+            if let Some(last) = visits.last_mut() {
+                last.exit_s = duration_s;
+            }
+            RunReport {
+                outcome: ir::Outcome::Failure,
+                terminal: None,
+                message: reflex_message(&violation, &state, location_of(&state).as_deref()),
+                visits,
+                duration_s,
+                reflex: Some(*violation),
+                safety: SafetyStats::default(),
+            }
+        }
+        Err(other) => return Err(other),
+    };
+    report.safety = rig.safety_stats().clone();
+    Ok(report)
+}
+
+fn skill_loop(
+    bound: &BoundSkill<'_>,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
     mut log: Option<&mut RunLog>,
+    visits: &mut Vec<Visit>,
+    start_s: f64,
 ) -> Result<RunReport, ExecError> {
     let skill = bound.skill;
-    let start_s = rig.time_s();
     prepose_for(bound.learned, rig, options, &mut log)?;
     let run_start = rig.time_s();
     rig.sense();
     let mut machine = Machine::start(bound, options.overrides, rig)?;
-    let mut visits = vec![Visit {
+    visits.push(Visit {
         state: machine.state().name.clone(),
         enter_s: rig.time_s() - start_s,
         exit_s: 0.0,
-    }];
+    });
     let mut last_cmd: Option<Command> = None;
     let dt = options.dt_s;
     loop {
@@ -165,8 +256,10 @@ pub fn run_skill(
                 outcome: *outcome,
                 terminal: Some(state.name.clone()),
                 message: text,
-                visits,
+                visits: std::mem::take(visits),
                 duration_s: t - start_s,
+                reflex: None,
+                safety: SafetyStats::default(),
             });
         }
         if t - run_start > options.max_duration_s {
@@ -181,8 +274,10 @@ pub fn run_skill(
                     state.name,
                     location(&state.span)
                 ),
-                visits,
+                visits: std::mem::take(visits),
                 duration_s: t - start_s,
+                reflex: None,
+                safety: SafetyStats::default(),
             });
         }
         let active = machine.active().expect("terminal states returned above");
@@ -217,8 +312,10 @@ pub fn run_skill(
                     outcome: ir::Outcome::Failure,
                     terminal: Some(skill.states[target.index()].name.clone()),
                     message: text,
-                    visits,
+                    visits: std::mem::take(visits),
                     duration_s: t - start_s,
+                    reflex: None,
+                    safety: SafetyStats::default(),
                 });
             }
             continue;
@@ -241,12 +338,35 @@ pub fn run_replay(
     learned: &Learned,
     rig: &mut Rig<'_>,
     options: &ExecOptions,
-    mut log: Option<&mut RunLog>,
+    log: Option<&mut RunLog>,
 ) -> Result<RunReport, ExecError> {
+    let limits = limits_for(
+        learned,
+        rig.flange_to_tool(),
+        options.overrides.force_scale,
+        &options.limits,
+    )
+    .map_err(|err| ExecError::Limits {
+        reason: err.to_string(),
+    })?;
+    rig.set_limits(limits);
+    rig.reset_safety_stats();
     let start_s = rig.time_s();
+    let mut visits = Vec::new();
+    let result = replay_loop(learned, rig, options, log, &mut visits, start_s);
+    finish(result, rig, visits, start_s, |_| None)
+}
+
+fn replay_loop(
+    learned: &Learned,
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+    mut log: Option<&mut RunLog>,
+    visits: &mut Vec<Visit>,
+    start_s: f64,
+) -> Result<RunReport, ExecError> {
     let order = motions_in_order(learned);
     prepose_for(learned, rig, options, &mut log)?;
-    let mut visits = Vec::new();
     let dt = options.dt_s;
     let speed = options.overrides.speed_factor;
     let mut velocity = [0.0; 3];
@@ -299,7 +419,9 @@ pub fn run_replay(
         outcome: ir::Outcome::Success,
         terminal: None,
         message: "replayed every segment".to_string(),
-        visits,
+        visits: std::mem::take(visits),
         duration_s: rig.time_s() - start_s,
+        reflex: None,
+        safety: SafetyStats::default(),
     })
 }

@@ -152,10 +152,13 @@ fn task_on(
     for (index, task_step) in steps.iter().enumerate() {
         let report = run_step(task_step, index == 0, false, rig)?;
         let failed = report.report.outcome == skill_ir::Outcome::Failure;
+        // After a reflex the arm stands stopped, as a real arm does until an operator looks:
+        // no fallback runs.
+        let reflex = report.report.reflex.is_some();
         reports.push(report);
         if failed {
-            if let skill_ir::OnFailure::Fallback(fallback) = task_step.step.on_failure {
-                if let Some(fallback) = fallbacks.get(fallback as usize) {
+            if let (skill_ir::OnFailure::Fallback(fallback), false) = (&task_step.step.on_failure, reflex) {
+                if let Some(fallback) = fallbacks.get(*fallback as usize) {
                     reports.push(run_step(fallback, false, true, rig)?);
                 }
             }

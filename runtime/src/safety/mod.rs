@@ -80,6 +80,23 @@ impl Quantity {
         }
     }
 
+    /// The name of the limit that bounds it on the command line and in [`Limits::set`], if any
+    /// (non-finite numbers and the workspace box cannot be loosened by name).
+    pub fn limit_name(self) -> Option<&'static str> {
+        match self {
+            Quantity::ContactForce | Quantity::ArmContact => Some("force"),
+            Quantity::ContactMoment => Some("moment"),
+            Quantity::ToolSpeed => Some("speed"),
+            Quantity::ToolAngularSpeed => Some("angular_speed"),
+            Quantity::JointMargin => Some("joint_margin"),
+            Quantity::JointSpeed => Some("joint_speed"),
+            Quantity::TorqueSaturation => Some("saturation"),
+            Quantity::TrackingError => Some("tracking"),
+            Quantity::TrackingAngle => Some("tracking_angle"),
+            Quantity::NonFinite | Quantity::Workspace => None,
+        }
+    }
+
     fn describe(self) -> &'static str {
         match self {
             Quantity::NonFinite => "a non-finite number",
@@ -240,6 +257,12 @@ impl Supervisor {
     /// The figures so far.
     pub fn stats(&self) -> &SafetyStats {
         &self.stats
+    }
+
+    /// Starts the figures and the saturation windows afresh.
+    pub fn reset_stats(&mut self) {
+        self.stats = SafetyStats::default();
+        self.saturated_s.iter_mut().for_each(|s| *s = 0.0);
     }
 
     /// Checks one tick of `dt` seconds: the sensed state, what the controller measured, the

@@ -146,7 +146,8 @@ impl RapierPlant {
                         size[1] as Real / 2.0,
                         size[2] as Real / 2.0,
                     ));
-                    self.colliders.insert_with_parent(collider, body, &mut self.bodies);
+                    let handle = self.colliders.insert_with_parent(collider, body, &mut self.bodies);
+                    self.object_colliders.push((handle, name.clone()));
                 }
                 ObjectKind::Cylinder => {
                     let body = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
@@ -163,7 +164,8 @@ impl RapierPlant {
                         // an active hook are never recycled; the hooks are `()`, which change nothing.
                         .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
                     );
-                    self.colliders.insert_with_parent(collider, body, &mut self.bodies);
+                    let handle = self.colliders.insert_with_parent(collider, body, &mut self.bodies);
+                    self.object_colliders.push((handle, name.clone()));
                 }
                 ObjectKind::Button => {
                     let radius = object.radius.unwrap_or(0.02) as Real;
@@ -186,7 +188,8 @@ impl RapierPlant {
                             .position(z_to_y())
                             .density(0.0),
                     );
-                    self.colliders.insert_with_parent(collider, cap, &mut self.bodies);
+                    let handle = self.colliders.insert_with_parent(collider, cap, &mut self.bodies);
+                    self.object_colliders.push((handle, name.clone()));
                     // The lower stop is a fixed disc of the cap's radius whose top is where the cap's top is
                     // when fully pressed, hidden inside the cap at every depth (for travel < 3/4 height). The
                     // tool presses the cap down onto it and then rests on it as on a table. A joint limit
@@ -198,7 +201,12 @@ impl RapierPlant {
                         Pose::from_translation(Vector::new(0.0, 0.0, height / 2.0 - travel - thickness / 2.0))
                             * z_to_y(),
                     ));
-                    self.colliders.insert_with_parent(stop, housing, &mut self.bodies);
+                    // The stop hangs on a fixed body of its own: the housing roots the cap's multibody,
+                    // and rapier gives contacts with a multibody link the soft-body (cap) softness,
+                    // not the fixed-object one the scene's stiffness sets.
+                    let stop_body = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
+                    let handle = self.colliders.insert_with_parent(stop, stop_body, &mut self.bodies);
+                    self.object_colliders.push((handle, name.clone()));
                     let align = Rotation::from_rotation_arc(Vector::X, Vector::Z);
                     let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_PRISMATIC_AXES)
                         .local_frame1(Pose::from_rotation(align))

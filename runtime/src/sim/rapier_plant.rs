@@ -36,6 +36,16 @@ pub enum SimError {
         /// What is not supported.
         reason: String,
     },
+    /// The tool starts inside an object: no real run starts that way.
+    #[error("scene `{file}`: the tool starts {depth_mm:.1} mm inside object `{object}`; move the object or start the robot elsewhere (`robot.q0`)")]
+    StartsInside {
+        /// The scene file.
+        file: String,
+        /// The object.
+        object: String,
+        /// How deep \[mm\].
+        depth_mm: f64,
+    },
 }
 
 /// Physics settings beyond the scene file.
@@ -93,6 +103,8 @@ pub struct RapierPlant {
     pub(super) links: Vec<RigidBodyHandle>,
     pub(super) joints: Vec<MultibodyJointHandle>,
     pub(super) tool_colliders: Vec<ColliderHandle>,
+    /// Every scene object's colliders, with the object's name.
+    pub(super) object_colliders: Vec<(ColliderHandle, String)>,
     pub(super) sensor_body: usize,
     pub(super) sensor_in_body: IsometryMatrix3<f64>,
     pub(super) buttons: Vec<Button>,
@@ -105,8 +117,42 @@ pub struct RapierPlant {
     pub(super) dt: f64,
 }
 
-/// Natural frequency of the soft contacts between two moving bodies (tool and button cap), Hz.
-const CAP_CONTACT_HZ: Real = 1000.0;
+/// The natural frequency (Hz) that gives a contact of `stiffness` N/m at the tool of `robot` at
+/// `q`: `√(k / m) / 2π` with `m` the arm's effective mass along the base z,
+/// `1 / (J_z M⁻¹ J_zᵀ)`. A singular configuration falls back to 2.5 kg.
+fn static_contact_hz(robot: &Robot, q: &[f64], stiffness: f64) -> f64 {
+    let n = robot.dof();
+    let mut data = robot.data();
+    robot.forward_kinematics(&mut data, q);
+    let mut mass = nalgebra::DMatrix::zeros(n, n);
+    robot.mass_matrix(&mut data, &mut mass);
+    let mut jacobian = nalgebra::Matrix6xX::zeros(n);
+    robot.tool_jacobian(&data, &mut jacobian);
+    let row = jacobian.row(2).transpose();
+    let m_eff = mass
+        .cholesky()
+        .map(|chol| 1.0 / row.dot(&chol.solve(&row)))
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .unwrap_or(2.5);
+    (stiffness / m_eff).sqrt() / (2.0 * std::f64::consts::PI)
+}
+
+/// The natural frequency (Hz) of contacts between two moving bodies (the tool and a button cap)
+/// that gives the lightest cap's contact `stiffness` N/m; 1 kHz without buttons.
+fn cap_contact_hz(scene: &Scene, stiffness: f64) -> f64 {
+    let lightest = scene
+        .spec()
+        .objects
+        .values()
+        .filter(|object| object.kind == super::ObjectKind::Button)
+        .map(|object| object.mass.unwrap_or(0.02))
+        .fold(f64::INFINITY, f64::min);
+    if lightest.is_finite() && lightest > 0.0 {
+        (stiffness / lightest).sqrt() / (2.0 * std::f64::consts::PI)
+    } else {
+        1000.0
+    }
+}
 
 impl RapierPlant {
     /// Builds the simulation of a scene file: loads its URDF (relative to the scene), starts at `q0`.
@@ -167,12 +213,29 @@ impl RapierPlant {
                 // One solver iteration reproduces the exact multibody dynamics (more substeps change
                 // the accelerations); clustering would merge manifolds the sensor reads.
                 num_solver_iterations: 1,
+                // rapier follows each soft solve with a rigid "stabilization" pass that removes the
+                // contact's softness from the velocity solve: an impact then stops in one step,
+                // whatever the scene's stiffness (measured: 50 N at 20 mm/s with 5e4 N/m set).
+                num_internal_stabilization_iterations: 0,
                 contact_clustering: false,
                 // rapier's contacts are soft springs of stiffness m ω², m the contact's effective mass. The
-                // only contacts between two moving bodies are tool-button cap, where m is the 20 g cap's:
-                // at the default 30 Hz that is 710 N/m, and a 10 N press sank the tool 14 mm into the cap.
-                // At 1 kHz (7.9e5 N/m for a 20 g cap) the spring's 5 N leave 7 µm.
-                contact_softness: SpringCoefficients::new(CAP_CONTACT_HZ, 10.0),
+                // only contacts between two moving bodies are tool-button cap, where m is the light cap's:
+                // at the default 30 Hz a 20 g cap gives 710 N/m, and a 10 N press sank the tool 14 mm into
+                // it. The frequency is set so that the lightest cap's contact has the scene's stiffness,
+                // like the contacts with fixed objects (a rigid cap contact made the cap's arrival on its
+                // stop a 50 N impact at 25 mm/s).
+                contact_softness: SpringCoefficients::new(
+                    cap_contact_hz(scene, spec.sim.contact_stiffness) as Real,
+                    spec.sim.contact_damping_ratio as Real,
+                ),
+                // Contacts with fixed objects: rapier's spring is m ω² for the contact's effective
+                // mass m; the scene gives a stiffness, turned into ω with the arm's effective mass
+                // at the tool along the base z at the start configuration (the approach direction
+                // of most skills; it varies by tens of percent over the workspace).
+                static_contact_softness: SpringCoefficients::new(
+                    static_contact_hz(&robot, &q0, spec.sim.contact_stiffness) as Real,
+                    spec.sim.contact_damping_ratio as Real,
+                ),
                 // No warm start. With one solver iteration, a sliding contact's warm-started friction impulse
                 // (at the Coulomb limit) pushed the probe off the drum through the arm's coupled normal and
                 // tangential effective mass: the normal row then solved to zero, the friction bound fell to
@@ -201,6 +264,7 @@ impl RapierPlant {
             links: Vec::with_capacity(n),
             joints: Vec::with_capacity(n),
             tool_colliders: Vec::new(),
+            object_colliders: Vec::new(),
             sensor_body,
             sensor_in_body: robot.links()[sensor_link].link_in_body,
             buttons: Vec::new(),
@@ -215,7 +279,44 @@ impl RapierPlant {
         };
         plant.build_arm(&q0, sensor_link, options);
         plant.build_objects(scene);
+        plant.check_start(scene)?;
         Ok(plant)
+    }
+
+    /// Refuses a start with the tool inside an object (deeper than 0.1 mm, rapier's contact slop).
+    fn check_start(&self, scene: &Scene) -> Result<(), SimError> {
+        for tool in &self.tool_colliders {
+            let Some(tool) = self.colliders.get(*tool) else {
+                continue;
+            };
+            // Colliders follow their bodies only when the pipeline steps: place the tool's from its
+            // link, which the multibody's kinematics put at q0.
+            let tool_pose = match (
+                tool.parent().and_then(|h| self.bodies.get(h)),
+                tool.position_wrt_parent(),
+            ) {
+                (Some(body), Some(relative)) => *body.position() * *relative,
+                _ => *tool.position(),
+            };
+            for (handle, name) in &self.object_colliders {
+                let Some(object) = self.colliders.get(*handle) else {
+                    continue;
+                };
+                let contact =
+                    rapier3d::parry::query::contact(&tool_pose, tool.shape(), object.position(), object.shape(), 0.0);
+                if let Ok(Some(contact)) = contact {
+                    let depth = -f64::from(contact.dist);
+                    if depth > 1e-4 {
+                        return Err(SimError::StartsInside {
+                            file: scene.file().to_owned(),
+                            object: name.clone(),
+                            depth_mm: depth * 1e3,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The robot model the plant simulates.

@@ -166,18 +166,7 @@ pub fn run_skill(
     options: &ExecOptions,
     log: Option<&mut RunLog>,
 ) -> Result<RunReport, ExecError> {
-    let limits = limits_for(
-        bound.learned,
-        rig.flange_to_tool(),
-        options.overrides.force_scale,
-        &options.limits,
-    )
-    .map_err(|err| ExecError::Limits {
-        reason: err.to_string(),
-    })?;
-    rig.set_limits(limits);
-    rig.reset_safety_stats();
-    let start_s = rig.time_s();
+    let start_s = arm_supervisor(bound.learned, rig, options)?;
     let mut visits = Vec::new();
     let result = skill_loop(bound, rig, options, log, &mut visits, start_s);
     let location_of = |state: &str| {
@@ -189,6 +178,23 @@ pub fn run_skill(
             .map(|s| location(&s.span))
     };
     finish(result, rig, visits, start_s, location_of)
+}
+
+/// Sets the supervisor's limits for a run of `learned` and starts its figures afresh; returns
+/// the run's start time.
+fn arm_supervisor(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions) -> Result<f64, ExecError> {
+    let limits = limits_for(
+        learned,
+        rig.flange_to_tool(),
+        options.overrides.force_scale,
+        &options.limits,
+    )
+    .map_err(|err| ExecError::Limits {
+        reason: err.to_string(),
+    })?;
+    rig.set_limits(limits);
+    rig.reset_safety_stats();
+    Ok(rig.time_s())
 }
 
 /// Turns a run's result into its report: a reflex becomes a failure, the safety figures are added.
@@ -340,18 +346,7 @@ pub fn run_replay(
     options: &ExecOptions,
     log: Option<&mut RunLog>,
 ) -> Result<RunReport, ExecError> {
-    let limits = limits_for(
-        learned,
-        rig.flange_to_tool(),
-        options.overrides.force_scale,
-        &options.limits,
-    )
-    .map_err(|err| ExecError::Limits {
-        reason: err.to_string(),
-    })?;
-    rig.set_limits(limits);
-    rig.reset_safety_stats();
-    let start_s = rig.time_s();
+    let start_s = arm_supervisor(learned, rig, options)?;
     let mut visits = Vec::new();
     let result = replay_loop(learned, rig, options, log, &mut visits, start_s);
     finish(result, rig, visits, start_s, |_| None)

@@ -43,9 +43,14 @@ pub fn learned_peak_force(learned: &Learned) -> f64 {
     peak
 }
 
-/// The box the learned motions' tool points start and end in, grown by [`WORKSPACE_MARGIN_M`].
-pub fn learned_workspace(learned: &Learned, flange_to_tool: &Isometry3<f64>) -> Option<Workspace> {
-    let mut points = Vec::new();
+/// The box the learned motions' tool points start and end in, and the tool's position when the
+/// run starts (`start`, where pre-positioning begins), grown by [`WORKSPACE_MARGIN_M`].
+pub fn learned_workspace(
+    learned: &Learned,
+    flange_to_tool: &Isometry3<f64>,
+    start: Option<[f64; 3]>,
+) -> Option<Workspace> {
+    let mut points: Vec<[f64; 3]> = start.into_iter().collect();
     for motion in learned.motions.values() {
         let position = &motion.position;
         let orientation = &motion.orientation;
@@ -61,15 +66,17 @@ pub fn learned_workspace(learned: &Learned, flange_to_tool: &Isometry3<f64>) -> 
     Workspace::around(points.iter(), WORKSPACE_MARGIN_M)
 }
 
-/// The limits of a run of `learned`: its defaults, scaled by a task's force scale, then each
+/// The limits of a run of `learned` starting with the tool at `start`: its defaults, scaled by a task's force scale, then each
 /// user override (`force=60`, `speed=0.1`, …) in order.
 pub fn limits_for(
     learned: &Learned,
     flange_to_tool: &Isometry3<f64>,
+    start: Option<[f64; 3]>,
     force_scale: f64,
     overrides: &[(String, f64)],
 ) -> Result<Limits, LimitError> {
-    let mut limits = Limits::for_skill(learned_peak_force(learned), learned_workspace(learned, flange_to_tool));
+    let workspace = learned_workspace(learned, flange_to_tool, start);
+    let mut limits = Limits::for_skill(learned_peak_force(learned), workspace);
     limits.scale_force(force_scale);
     for (name, value) in overrides {
         limits.set(name, *value)?;

@@ -183,9 +183,12 @@ pub fn run_skill(
 /// Sets the supervisor's limits for a run of `learned` and starts its figures afresh; returns
 /// the run's start time.
 fn arm_supervisor(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions) -> Result<f64, ExecError> {
+    rig.sense();
+    let tool = rig.tool().translation.vector;
     let limits = limits_for(
         learned,
         rig.flange_to_tool(),
+        Some([tool.x, tool.y, tool.z]),
         options.overrides.force_scale,
         &options.limits,
     )

@@ -25,6 +25,8 @@ pub struct Tick {
     pub selection: u8,
     /// Commanded joint torques after limits \[N m\].
     pub torques: Vec<f64>,
+    /// Joint positions \[rad\] then joint velocities \[rad/s\], as sensed this tick (2 × dof).
+    pub joint_state: Vec<f64>,
 }
 
 /// Every tick of a run, with the names of the states ticks refer to.
@@ -67,6 +69,12 @@ pub(super) fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
     for joint in 1..=dof {
         let _ = write!(out, ",tau{joint}");
     }
+    for joint in 1..=dof {
+        let _ = write!(out, ",q{joint}");
+    }
+    for joint in 1..=dof {
+        let _ = write!(out, ",qd{joint}");
+    }
     out.push('\n');
     for (step, log) in logs {
         for tick in &log.ticks {
@@ -89,6 +97,9 @@ pub(super) fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
             }
             for value in &tick.torques {
                 let _ = write!(out, ",{value:.4}");
+            }
+            for value in &tick.joint_state {
+                let _ = write!(out, ",{value:.6}");
             }
             out.push('\n');
         }

@@ -118,8 +118,14 @@ impl<'p> Rig<'p> {
         let torques = self.controller.torques(&self.obs, cmd, dt);
         self.torques.copy_from_slice(torques);
         if let Some(log) = log.as_deref_mut() {
-            log.ticks
-                .push(tick_record(self.t_s, state, cmd, &self.controller, &self.torques));
+            log.ticks.push(tick_record(
+                self.t_s,
+                state,
+                cmd,
+                &self.controller,
+                &self.torques,
+                &self.obs,
+            ));
         }
         let checked = self
             .supervisor
@@ -165,8 +171,14 @@ impl<'p> Rig<'p> {
                     Isometry3::identity()
                 };
                 let hold = Command::hold(pose, [0.0; 6]);
-                log.ticks
-                    .push(tick_record(self.t_s, state, &hold, &self.controller, &self.torques));
+                log.ticks.push(tick_record(
+                    self.t_s,
+                    state,
+                    &hold,
+                    &self.controller,
+                    &self.torques,
+                    &self.obs,
+                ));
             }
             self.apply_and_step("reflex", dt)?;
         }
@@ -229,7 +241,14 @@ impl<'p> Rig<'p> {
     }
 }
 
-fn tick_record(t_s: f64, state: u32, cmd: &Command, controller: &HybridController, torques: &[f64]) -> Tick {
+fn tick_record(
+    t_s: f64,
+    state: u32,
+    cmd: &Command,
+    controller: &HybridController,
+    torques: &[f64],
+    obs: &Observation,
+) -> Tick {
     let measured = &controller.state().tool;
     let pose7 = |pose: &Isometry3<f64>| {
         let q = pose.rotation.quaternion();
@@ -263,5 +282,6 @@ fn tick_record(t_s: f64, state: u32, cmd: &Command, controller: &HybridControlle
         frame_z: [z.x, z.y, z.z],
         selection,
         torques: torques.to_vec(),
+        joint_state: obs.q.iter().chain(obs.qd.iter()).copied().collect(),
     }
 }

@@ -88,6 +88,7 @@ fn malformed_scenes_give_clear_errors_naming_the_file() {
         ("010", "`robot.q0`"),
         ("011", "`robot.q0.1`"),
         ("012", "unknown link `nope`"),
+        ("013", "`sensor.noise_force_n` = `inf`: noise must be in [0, 100]"),
     ];
     let files = corpus("scene");
     assert_eq!(files.len(), expected.len());

@@ -425,12 +425,19 @@ fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
         ));
     }
     let sensor = &spec.sensor;
-    if !(sensor.noise_force_n >= 0.0 && sensor.noise_torque_nm >= 0.0) {
-        return Err(invalid(
-            "sensor.noise_force_n".into(),
-            format!("{} / {}", sensor.noise_force_n, sensor.noise_torque_nm),
-            "noise must be zero or positive",
-        ));
+    // A wrist sensor's noise is a fraction of a newton; 100 N of noise is a broken sensor, and an
+    // infinite one turned every reading into NaN.
+    for (field, value, bound) in [
+        ("sensor.noise_force_n", sensor.noise_force_n, 100.0),
+        ("sensor.noise_torque_nm", sensor.noise_torque_nm, 10.0),
+    ] {
+        if !(0.0..=bound).contains(&value) {
+            return Err(invalid(
+                field.into(),
+                value.to_string(),
+                &format!("noise must be in [0, {bound}]"),
+            ));
+        }
     }
     if !sensor.cutoff_hz.is_finite() || sensor.bias.iter().any(|b| !b.is_finite()) {
         return Err(invalid(

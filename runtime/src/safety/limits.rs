@@ -148,7 +148,8 @@ impl Limits {
         Ok(())
     }
 
-    /// Scales the force and moment limits (a task step's force scale pushes harder on purpose).
+    /// Scales the force and moment limits up by a task step's force scale (it pushes harder on
+    /// purpose); a scale below 1 keeps the defaults, which already bound the learned forces.
     pub fn scale_force(&mut self, factor: f64) {
         if factor.is_finite() && factor > 1.0 {
             self.force_n *= factor;

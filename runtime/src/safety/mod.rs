@@ -327,45 +327,25 @@ impl Supervisor {
             }
         }
 
-        if force > limits.force_n {
-            return Err(violation(Quantity::ContactForce, force, limits.force_n, "", None));
-        }
-        if moment > limits.moment_nm {
-            return Err(violation(Quantity::ContactMoment, moment, limits.moment_nm, "", None));
-        }
-        if speed > limits.tool_speed_mps {
-            return Err(violation(Quantity::ToolSpeed, speed, limits.tool_speed_mps, "", None));
-        }
-        if angular > limits.tool_angular_speed_radps {
-            return Err(violation(
-                Quantity::ToolAngularSpeed,
-                angular,
-                limits.tool_angular_speed_radps,
-                "",
-                None,
-            ));
+        let cartesian = [
+            (Quantity::ContactForce, force, limits.force_n),
+            (Quantity::ContactMoment, moment, limits.moment_nm),
+            (Quantity::ToolSpeed, speed, limits.tool_speed_mps),
+            (Quantity::ToolAngularSpeed, angular, limits.tool_angular_speed_radps),
+        ];
+        if let Some((quantity, measured, limit)) = first_above(cartesian) {
+            return Err(violation(quantity, measured, limit, "", None));
         }
         if let Some((quantity, measured, limit, idx)) = joint_problem {
             return Err(violation(quantity, measured, limit, &self.names[idx], Some(idx)));
         }
         let (position_error, angle_error) = tracking_errors(sensed, cmd);
-        if position_error > limits.tracking_error_m {
-            return Err(violation(
-                Quantity::TrackingError,
-                position_error,
-                limits.tracking_error_m,
-                "",
-                None,
-            ));
-        }
-        if angle_error > limits.tracking_error_rad {
-            return Err(violation(
-                Quantity::TrackingAngle,
-                angle_error,
-                limits.tracking_error_rad,
-                "",
-                None,
-            ));
+        let tracking = [
+            (Quantity::TrackingError, position_error, limits.tracking_error_m),
+            (Quantity::TrackingAngle, angle_error, limits.tracking_error_rad),
+        ];
+        if let Some((quantity, measured, limit)) = first_above(tracking) {
+            return Err(violation(quantity, measured, limit, "", None));
         }
         if let Some(workspace) = &limits.workspace {
             let p = sensed.tool.translation.vector;
@@ -397,6 +377,11 @@ impl Supervisor {
             };
         }
     }
+}
+
+/// The first `(quantity, measured, limit)` whose measured value is above its limit.
+fn first_above<const N: usize>(checks: [(Quantity, f64, f64); N]) -> Option<(Quantity, f64, f64)> {
+    checks.into_iter().find(|(_, measured, limit)| measured > limit)
 }
 
 /// Where the first non-finite number is, if any.

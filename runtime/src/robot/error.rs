@@ -72,6 +72,18 @@ pub enum RobotError {
         /// What to do instead.
         hint: String,
     },
+    /// No joint positions within the limits put the tool at the pose asked for.
+    #[error("no joint positions of robot `{robot}` put the tool at {target} (closest: {miss_mm:.1} mm, {miss_deg:.1}° away): the pose is out of reach or beyond the joint limits")]
+    Unreachable {
+        /// The robot's name.
+        robot: String,
+        /// The pose asked for, as text.
+        target: String,
+        /// Remaining position error \[mm\].
+        miss_mm: f64,
+        /// Remaining orientation error \[deg\].
+        miss_deg: f64,
+    },
     /// A problem in the model a file describes, with the file's name.
     #[error("robot `{file}`: {source}")]
     InFile {

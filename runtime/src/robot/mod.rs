@@ -18,6 +18,7 @@
 mod chain;
 mod dynamics;
 mod error;
+mod ik;
 mod inspect;
 mod kinematics;
 mod model;

@@ -43,6 +43,8 @@ pub struct Skill {
     pub name: Ident,
     /// The `learn` blocks (one is expected; more are merged and duplicates reported).
     pub learn: Vec<LearnDecl>,
+    /// The entries of the `limits` blocks, in source order (more blocks are merged).
+    pub limits: Vec<LimitEntry>,
     /// States and terminals in source order.
     pub states: Vec<State>,
     /// The whole skill.
@@ -63,6 +65,19 @@ pub struct LearnDecl {
     /// `expect N` on a `segments` declaration.
     pub expect: Option<(u64, Span)>,
     /// The whole declaration.
+    pub span: Span,
+}
+
+/// `force: 40 N` inside `limits { }`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LimitEntry {
+    /// Doc comment lines.
+    pub doc: Vec<String>,
+    /// The limit's name as written (checked against the supervisor's table later).
+    pub name: Ident,
+    /// Its value.
+    pub value: Expr,
+    /// The whole entry.
     pub span: Span,
 }
 
@@ -165,6 +180,13 @@ pub enum StmtKind {
     Gains(Vec<Arg>),
     /// `entry reset_integral, tare`.
     Entry(Vec<Expr>),
+    /// `approach within 10 cm at 25 mm/s`.
+    Approach {
+        /// The distance from the motion's goal where the slow approach begins.
+        within: Expr,
+        /// The largest speed there.
+        speed: Expr,
+    },
     /// `on GUARD -> TARGET`.
     Transition {
         /// The guard.
@@ -390,6 +412,8 @@ pub enum ExprKind {
     Str(String),
     /// `[a, b, c]`.
     List(Vec<Expr>),
+    /// `{ key: value, ... }` (a task step's `limits:`).
+    Record(Vec<Arg>),
     /// `segment N` (1-based as written).
     Segment(u64),
     /// `name(args)`.

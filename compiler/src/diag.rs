@@ -123,6 +123,15 @@ codes! {
     ImportCycle => "skill::check::import_cycle", Error;
     /// An imported file that cannot be read.
     MissingImport => "skill::check::missing_import", Error;
+    /// A limit the safety supervisor does not have: `limits { forse: 40 N }`.
+    UnknownLimit => "skill::check::unknown_limit", Error;
+    /// A limit set twice in one skill's `limits` or one step's `limits:`:
+    /// `limits { force: 40 N  force: 50 N }`.
+    DuplicateLimit => "skill::check::duplicate_limit", Error;
+    /// A zero or negative limit: `limits { speed: 0 mm/s }` (`inf` switches a check off).
+    NonPositiveLimit => "skill::check::non_positive_limit", Error;
+    /// `approach within 5 cm at 10 mm/s` in a state without `move`: there is no motion to slow.
+    ApproachWithoutMove => "skill::check::approach_without_move", Error;
     /// A force-controlled axis whose PI integral has no limit: it can wind up.
     NoIntegralLimit => "skill::lint::no_integral_limit", Warning;
     /// A state that only waits for contact, with no timeout, motion or dwell to leave it.
@@ -131,6 +140,9 @@ codes! {
     Unused => "skill::lint::unused", Warning;
     /// `apply` in a state with no force-controlled axis: the force is ignored.
     ForceWithoutForceAxes => "skill::lint::force_without_force_axes", Warning;
+    /// `approach within 5 cm at 10 mm/s` in a state no force guard leaves: it slows down for
+    /// a contact nothing waits for.
+    ApproachWithoutForceGuard => "skill::lint::approach_without_force_guard", Warning;
 }
 
 impl fmt::Display for Code {

@@ -207,6 +207,22 @@ impl Printer<'_> {
             self.indent();
             self.out.push_str("}\n");
         }
+        if !skill.limits.is_empty() {
+            self.blank();
+            self.line_at(skill.limits[0].span.start, "limits {");
+            self.depth += 1;
+            for entry in &skill.limits {
+                self.docs(entry.span.start, &entry.doc);
+                self.line_at(
+                    entry.span.start,
+                    &format!("{}: {}", entry.name.name, expr(&entry.value)),
+                );
+                self.finish(entry.span.end);
+            }
+            self.depth -= 1;
+            self.indent();
+            self.out.push_str("}\n");
+        }
         let mut previous_terminal = false;
         for state in &skill.states {
             let terminal = matches!(state.body, StateBody::Terminal { .. });
@@ -300,6 +316,7 @@ fn statement(stmt: &StmtKind) -> String {
             let actions: Vec<String> = actions.iter().map(expr).collect();
             format!("entry {}", actions.join(", "))
         }
+        StmtKind::Approach { within, speed } => format!("approach within {} at {}", expr(within), expr(speed)),
         StmtKind::Transition { guard: g, target } => {
             let target = match target {
                 Target::State(name) => name.name.clone(),
@@ -375,6 +392,8 @@ fn expr(e: &Expr) -> String {
         ExprKind::Number(number) => number.text.clone(),
         ExprKind::Str(text) => quote(text),
         ExprKind::List(items) => format!("[{}]", items.iter().map(expr).collect::<Vec<_>>().join(", ")),
+        ExprKind::Record(entries) if entries.is_empty() => "{}".to_string(),
+        ExprKind::Record(entries) => format!("{{ {} }}", args(entries)),
         ExprKind::Segment(n) => format!("segment {n}"),
         ExprKind::Call { name, args: list } => format!("{}({})", name.name, args(list)),
         ExprKind::Axis(axis) => format!("{}.{}", axis.frame.name, axis.axis.name),

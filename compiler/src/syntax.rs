@@ -174,6 +174,8 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         Rule::task => "`task`",
         Rule::doc => "a doc comment",
         Rule::learn => "`learn`",
+        Rule::limits => "`limits`",
+        Rule::limit_entry => "a limit (`force: 40 N`)",
         Rule::learn_entry | Rule::segments_decl | Rule::frame_decl | Rule::motion_decl => {
             "a learn declaration (`segments`, `frame`, `motion`, `force`, `threshold`)"
         }
@@ -184,10 +186,10 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         Rule::state => "`state`",
         Rule::terminal => "`terminal`",
         Rule::state_entry | Rule::move_stmt | Rule::control_stmt | Rule::stiffness_stmt | Rule::apply_stmt => {
-            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `on`)"
+            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `on`)"
         }
-        Rule::gains_stmt | Rule::entry_stmt | Rule::transition => {
-            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `on`)"
+        Rule::gains_stmt | Rule::entry_stmt | Rule::approach_stmt | Rule::approach_kw | Rule::transition => {
+            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `on`)"
         }
         Rule::from_current => "`from current`",
         Rule::control_group | Rule::control_mode => "`position` or `force`",
@@ -203,6 +205,7 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         Rule::call => "a call",
         Rule::arg | Rule::key => "an argument",
         Rule::list => "a list",
+        Rule::record => "a block (`{ force: 30 N }`)",
         Rule::segment_ref => "`segment N`",
         Rule::axis_ref => "a frame axis (`frame.z`)",
         Rule::quantity | Rule::number => "a number",
@@ -259,12 +262,14 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
     let mut doc = Vec::new();
     let mut name = None;
     let mut learn = Vec::new();
+    let mut limits = Vec::new();
     let mut states = Vec::new();
     for inner in pair.into_inner() {
         match inner.as_rule() {
             Rule::doc => doc.push(doc_text(inner)),
             Rule::ident => name = Some(ident(inner)),
             Rule::learn => learn.extend(inner.into_inner().map(learn_entry)),
+            Rule::limits => limits.extend(inner.into_inner().map(limit_entry)),
             Rule::state => states.push(state(inner)),
             Rule::terminal => states.push(terminal(inner)),
             rule => unreachable!("grammar: unexpected {rule:?} in skill"),
@@ -274,6 +279,7 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
         doc,
         name: name.expect("grammar: skill has a name"),
         learn,
+        limits,
         states,
         span,
     }
@@ -330,6 +336,28 @@ fn learn_entry(pair: Pair<'_, Rule>) -> LearnDecl {
         value: value.expect("grammar: learn declaration has a value"),
         expect,
         span,
+    }
+}
+
+fn limit_entry(pair: Pair<'_, Rule>) -> LimitEntry {
+    let mut doc = Vec::new();
+    let mut name = None;
+    let mut value = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            Rule::key => name = Some(ident(inner)),
+            _ => value = Some(expr(inner)),
+        }
+    }
+    let name = name.expect("grammar: a limit has a name");
+    let value = value.expect("grammar: a limit has a value");
+    // Like a learn declaration's, the span starts after the doc comment.
+    LimitEntry {
+        doc,
+        span: name.span.to(value.span),
+        name,
+        value,
     }
 }
 
@@ -420,6 +448,12 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
         Rule::apply_stmt => StmtKind::Apply(ident(inner.next().expect("grammar: apply names a force"))),
         Rule::gains_stmt => StmtKind::Gains(inner.map(arg).collect()),
         Rule::entry_stmt => StmtKind::Entry(inner.map(expr).collect()),
+        Rule::approach_stmt => {
+            let _keyword = inner.next().expect("grammar: approach keyword");
+            let within = expr(inner.next().expect("grammar: approach has a distance"));
+            let speed = expr(inner.next().expect("grammar: approach has a speed"));
+            StmtKind::Approach { within, speed }
+        }
         Rule::transition => {
             let guard_pair = inner.next().expect("grammar: transition has a guard");
             let target_pair = inner.next().expect("grammar: transition has a target");
@@ -696,6 +730,7 @@ fn expr(pair: Pair<'_, Rule>) -> Expr {
         Rule::number => ExprKind::Number(number(pair)),
         Rule::string => ExprKind::Str(string(pair)),
         Rule::list => ExprKind::List(pair.into_inner().map(expr).collect()),
+        Rule::record => ExprKind::Record(pair.into_inner().map(arg).collect()),
         Rule::segment_ref => {
             let integer = pair.into_inner().next().expect("grammar: segment has an index");
             ExprKind::Segment(parse_integer(integer.as_str()))

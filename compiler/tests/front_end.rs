@@ -354,3 +354,42 @@ fn every_snapshot_belongs_to_a_corpus_stdlib_or_example_file() {
         }
     }
 }
+
+#[test]
+fn formatting_prints_limits_approaches_and_step_limits() {
+    let text = "skill s { learn { motion p = dmp(segment 1) threshold t = 2 N }\nlimits { /// Why.\n force: 40 N, speed : 100 mm/s tracking: inf }\nstate a { move p approach within 5 cm at 10 mm/s on force(tool.z) >= t -> d on timeout 5 s -> d }\n terminal d: success }\ntask k { step x = s(demo: \"d.csv\", limits: {force: 30 N speed: 5 cm/s}) }\n";
+    let source = skill_compiler::SourceFile::new("f.skill", text);
+    let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
+    assert!(diags.is_empty(), "{diags:?}");
+    let formatted = skill_compiler::fmt::format(&source, &ast);
+    let expected = r#"skill s {
+    learn {
+        motion p = dmp(segment 1)
+        threshold t = 2 N
+    }
+
+    limits {
+        /// Why.
+        force: 40 N
+        speed: 100 mm/s
+        tracking: inf
+    }
+
+    state a {
+        move p from current
+        approach within 5 cm at 10 mm/s
+        on force(tool.z) >= t -> d
+        on timeout 5 s -> d
+    }
+
+    terminal d: success
+}
+
+task k {
+    step x = s(demo: "d.csv", limits: { force: 30 N, speed: 5 cm/s })
+}
+"#;
+    assert_eq!(formatted, expected);
+    let compiled = skill_compiler::compile_str("f.skill", &formatted);
+    assert!(compiled.diags.is_empty(), "{:?}", compiled.diags);
+}

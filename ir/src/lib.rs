@@ -19,7 +19,11 @@
 use serde::{Deserialize, Serialize};
 
 /// The IR format version. Bump on every change to the serialized form.
-pub const IR_VERSION: u32 = 1;
+///
+/// - 1: the first format.
+/// - 2: skills and task steps may carry supervisor [`Limit`]s, active states an [`Approach`]
+///   (all optional: a version 1 file reads as a version 2 file without them).
+pub const IR_VERSION: u32 = 2;
 
 /// A compiled `.skill` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -121,8 +125,139 @@ pub struct Skill {
     pub states: Vec<State>,
     /// All transitions; `transitions[id.0]` has id `id`.
     pub transitions: Vec<Transition>,
+    /// The safety supervisor's limits the skill sets (`limits { }`), in source order: applied
+    /// over the runtime's defaults, before a task step's and the command line's. Left out of the
+    /// JSON when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub limits: Vec<Limit>,
     /// Where the skill is written.
     pub span: SourceSpan,
+}
+
+/// One safety-supervisor limit set by name in a skill's `limits { }` block or a task step's
+/// `limits: { }` argument.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Limit {
+    /// Its name: one of [`LIMITS`].
+    pub name: String,
+    /// The value in the SI unit of its [`LimitDim`] (see [`LimitDim::si_unit`]); `None`
+    /// (`inf` in source) switches the check off.
+    pub value_si: Option<f64>,
+    /// Its doc comment (empty when none).
+    pub doc: String,
+    /// Where it is written.
+    pub span: SourceSpan,
+}
+
+impl Limit {
+    /// The value in SI units, `f64::INFINITY` for a check switched off.
+    pub fn value(&self) -> f64 {
+        self.value_si.unwrap_or(f64::INFINITY)
+    }
+}
+
+/// The dimension of a limit's value, which fixes the units it may be written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LimitDim {
+    /// A force \[N\].
+    Force,
+    /// A moment \[N m\].
+    Moment,
+    /// A linear speed \[m/s\].
+    Speed,
+    /// An angular speed \[rad/s\].
+    AngularSpeed,
+    /// An angle \[rad\].
+    Angle,
+    /// A plain number (a fraction of something the robot file gives).
+    Fraction,
+    /// A duration \[s\].
+    Duration,
+    /// A length \[m\].
+    Length,
+}
+
+impl LimitDim {
+    /// The SI unit a value of this dimension is stored in (`"fraction"` for a plain number).
+    pub fn si_unit(self) -> &'static str {
+        match self {
+            LimitDim::Force => "N",
+            LimitDim::Moment => "N m",
+            LimitDim::Speed => "m/s",
+            LimitDim::AngularSpeed => "rad/s",
+            LimitDim::Angle => "rad",
+            LimitDim::Fraction => "fraction",
+            LimitDim::Duration => "s",
+            LimitDim::Length => "m",
+        }
+    }
+}
+
+/// A limit the safety supervisor enforces and that can be set by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LimitSpec {
+    /// The name in `limits { }`, in a step's `limits: { }` and in `--limit NAME=VALUE`.
+    pub name: &'static str,
+    /// The dimension of its value.
+    pub dim: LimitDim,
+    /// What it bounds, for help texts.
+    pub what: &'static str,
+}
+
+/// THE table of the supervisor's named limits. The compiler checks `limits { }` against it and
+/// the runtime's `safety::LIMIT_NAMES` is this table (a runtime test checks that
+/// `Limits::set` accepts exactly these names), so the two cannot drift apart.
+pub const LIMITS: &[LimitSpec] = &[
+    LimitSpec {
+        name: "force",
+        dim: LimitDim::Force,
+        what: "the largest force the tool applies",
+    },
+    LimitSpec {
+        name: "moment",
+        dim: LimitDim::Moment,
+        what: "the largest moment the tool applies about the tool point",
+    },
+    LimitSpec {
+        name: "speed",
+        dim: LimitDim::Speed,
+        what: "the largest tool-point speed",
+    },
+    LimitSpec {
+        name: "angular_speed",
+        dim: LimitDim::AngularSpeed,
+        what: "the largest tool angular speed",
+    },
+    LimitSpec {
+        name: "joint_margin",
+        dim: LimitDim::Angle,
+        what: "the smallest distance of a joint from its position limits",
+    },
+    LimitSpec {
+        name: "joint_speed",
+        dim: LimitDim::Fraction,
+        what: "the largest joint speed as a fraction of the robot file's velocity limit",
+    },
+    LimitSpec {
+        name: "saturation",
+        dim: LimitDim::Duration,
+        what: "the longest time a joint torque may stay at its effort limit",
+    },
+    LimitSpec {
+        name: "tracking",
+        dim: LimitDim::Length,
+        what: "the largest position error on position-controlled axes",
+    },
+    LimitSpec {
+        name: "tracking_angle",
+        dim: LimitDim::Angle,
+        what: "the largest orientation error on position-controlled rotation axes",
+    },
+];
+
+/// The entry of [`LIMITS`] named `name`.
+pub fn limit_spec(name: &str) -> Option<&'static LimitSpec> {
+    LIMITS.iter().find(|spec| spec.name == name)
 }
 
 /// The learning plan: how to segment the demonstration and which features to extract.
@@ -561,6 +696,22 @@ pub struct ActiveState {
     pub entry: Vec<EntryAction>,
     /// Outgoing transitions in priority order: the first whose guard holds fires.
     pub transitions: Vec<TransitionId>,
+    /// How the state meets the contact it expects, if it says so (`approach within ... at ...`);
+    /// without it the runtime chooses from the state's force guards and search. Left out of the
+    /// JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach: Option<Approach>,
+}
+
+/// A declared guarded approach (`approach within 10 cm at 25 mm/s`): within `within_m` of the
+/// state's motion goal the motion's clock slows so that the commanded flange speed (the tool's,
+/// up to its rotation) is at most `speed_mps`. Not scaled by a task's speed factor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Approach {
+    /// Distance from the motion's goal where the slow approach begins \[m\].
+    pub within_m: f64,
+    /// Largest speed in that zone \[m/s\].
+    pub speed_mps: f64,
 }
 
 /// Gains of the PI force controller on the force-controlled axes.
@@ -753,6 +904,10 @@ pub struct Step {
     pub input: StepInput,
     /// Adjustments to the learned skill.
     pub overrides: Overrides,
+    /// Safety limits the step sets (`limits: { force: 30 N }`), applied after the skill's own
+    /// and before the command line's. Left out of the JSON when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub limits: Vec<Limit>,
     /// What happens when it fails.
     pub on_failure: OnFailure,
     /// Where it is written.
@@ -799,4 +954,88 @@ pub enum OnFailure {
     Abort,
     /// Run this fallback (an index into [`Task::fallbacks`]), then stop; the task fails.
     Fallback(u32),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A version 1 program: no limits, no approach.
+    fn version_1() -> serde_json::Value {
+        let span = serde_json::json!({"file": "a.skill", "line": 1, "column": 1, "start": 0, "end": 1});
+        serde_json::json!({
+            "ir_version": 1,
+            "source": "a.skill",
+            "skills": [{
+                "name": "s", "doc": "",
+                "learn": {
+                    "segmentation": {"method": "none"}, "segments": 1, "lowpass_hz": null,
+                    "resample_hz": null, "frames": [], "motions": [], "forces": [], "thresholds": []
+                },
+                "initial": 0,
+                "states": [{
+                    "id": 0, "name": "go", "doc": "",
+                    "kind": {
+                        "kind": "active", "motion": null, "frame": {"kind": "base"},
+                        "position_controlled": [true, true, true, true, true, true],
+                        "stiffness": [1500.0, 1500.0, 1500.0, 150.0, 150.0, 150.0], "force": null,
+                        "gains": {"kp": 0.5, "ki": 5.0, "integral_limit_n": 10.0},
+                        "entry": [], "transitions": []
+                    },
+                    "span": span
+                }],
+                "transitions": [],
+                "span": span
+            }],
+            "tasks": [{
+                "name": "t", "doc": "",
+                "steps": [{
+                    "name": "a", "skill": "s", "input": {"kind": "demo", "path": "d.csv"},
+                    "overrides": {"force_scale": 1.0, "speed_factor": 1.0, "goal_offset_m": [0.0, 0.0, 0.0]},
+                    "on_failure": {"policy": "abort"},
+                    "span": span
+                }],
+                "fallbacks": [],
+                "span": span
+            }]
+        })
+    }
+
+    #[test]
+    fn a_version_1_program_reads_and_writes_back_unchanged() {
+        let old = version_1();
+        let program: Program = serde_json::from_value(old.clone()).expect("version 1 reads");
+        let skill = &program.skills[0];
+        assert!(skill.limits.is_empty());
+        let StateKind::Active(active) = &skill.states[0].kind else {
+            panic!("an active state")
+        };
+        assert_eq!(active.approach, None);
+        assert!(program.tasks[0].steps[0].limits.is_empty());
+        // Empty limits and no approach are left out, so skills that use neither serialise (and
+        // hash) as before.
+        assert_eq!(serde_json::to_value(&program).expect("writes"), old);
+    }
+
+    #[test]
+    fn limit_names_are_unique_and_found() {
+        for (index, spec) in LIMITS.iter().enumerate() {
+            assert!(LIMITS[index + 1..].iter().all(|other| other.name != spec.name));
+            assert_eq!(limit_spec(spec.name), Some(spec));
+        }
+        assert_eq!(limit_spec("forse"), None);
+        let off = Limit {
+            name: "force".into(),
+            value_si: None,
+            doc: String::new(),
+            span: SourceSpan {
+                file: String::new(),
+                line: 1,
+                column: 1,
+                start: 0,
+                end: 0,
+            },
+        };
+        assert_eq!(off.value(), f64::INFINITY);
+    }
 }

@@ -42,6 +42,7 @@ fn two_motions() -> ir::Skill {
         initial: ir::StateId(0),
         states: Vec::new(),
         transitions: Vec::new(),
+        limits: Vec::new(),
         span: span(),
     }
 }

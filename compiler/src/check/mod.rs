@@ -5,13 +5,15 @@
 //! and the IR is only kept when the walk reported no error. The walk is one [`Checker`]
 //! whose methods are spread over this module's files by job: [`values`] (numbers, units,
 //! call arguments), [`scope`] (names), [`learn`], [`segments`], [`frames`] and [`forces`]
-//! (the learn block, whose functions [`signatures`] lists), [`states`], [`guards`] and
-//! [`reach`] (the state machine), and [`task`].
+//! (the learn block, whose functions [`signatures`] lists), [`limits`] (the supervisor's
+//! limits of a skill or a task step), [`states`], [`guards`] and [`reach`] (the state
+//! machine), and [`task`].
 
 mod forces;
 mod frames;
 mod guards;
 mod learn;
+mod limits;
 mod reach;
 mod scope;
 mod segments;
@@ -95,6 +97,7 @@ impl Checker<'_> {
         let errors_before = self.error_count();
         let mut scope = SkillScope::default();
         let learn = self.learn(&skill.learn, &mut scope);
+        let limits = self.skill_limits(&skill.limits);
         let (states, transitions, initial) = self.states(skill, &mut scope);
         if self.error_count() == errors_before {
             // After an error, a name may look unused only because its use did not resolve.
@@ -111,6 +114,7 @@ impl Checker<'_> {
             initial,
             states,
             transitions,
+            limits,
             span: self.ir_span(skill.name.span),
         })
     }

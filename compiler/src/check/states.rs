@@ -1,5 +1,5 @@
-//! States: their statements (move, control, stiffness, apply, gains, entry) and transition
-//! targets, lowered to the controller's settings per state (docs/method.md §6).
+//! States: their statements (move, control, stiffness, apply, gains, entry, approach) and
+//! transition targets, lowered to the controller's settings per state (docs/method.md §6).
 
 use super::scope::{SkillScope, SymKind};
 use super::values::Args;
@@ -21,6 +21,16 @@ pub const DEFAULT_GAINS: ir::ForceGains = ir::ForceGains {
     ki: 5.0,
     integral_limit_n: Some(10.0),
 };
+
+/// Whether a guard compares a force anywhere (so the state waits for contact).
+fn mentions_force(guard: &ast::Guard) -> bool {
+    match &guard.kind {
+        ast::GuardKind::Or(parts) | ast::GuardKind::And(parts) => parts.iter().any(mentions_force),
+        ast::GuardKind::Not(inner) => mentions_force(inner),
+        ast::GuardKind::Force { .. } => true,
+        ast::GuardKind::Timed { .. } | ast::GuardKind::ForceReached(_) | ast::GuardKind::Named(_) => false,
+    }
+}
 
 impl Checker<'_> {
     pub(super) fn states(
@@ -155,6 +165,8 @@ impl Checker<'_> {
         let mut gains = DEFAULT_GAINS;
         let mut gains_span = None;
         let mut entry = Vec::new();
+        let mut approach = None;
+        let mut approach_span = None;
         let mut state_transitions: Vec<(ir::Transition, &ast::Guard, Span)> = Vec::new();
 
         for stmt in stmts {
@@ -165,6 +177,7 @@ impl Checker<'_> {
                 StmtKind::Apply(_) => Some("apply"),
                 StmtKind::Gains(_) => Some("gains"),
                 StmtKind::Entry(_) => Some("entry"),
+                StmtKind::Approach { .. } => Some("approach"),
                 StmtKind::Transition { .. } => None,
             };
             if let Some(keyword) = keyword {
@@ -216,6 +229,10 @@ impl Checker<'_> {
                             entry.push(action);
                         }
                     }
+                }
+                StmtKind::Approach { within, speed } => {
+                    approach_span = Some(stmt.span);
+                    approach = self.approach(within, speed);
                 }
                 StmtKind::Transition { guard, target } => {
                     let resolved_guard = self.guard(guard, scope);
@@ -285,6 +302,9 @@ impl Checker<'_> {
 
         // A `move` that failed to resolve still runs a motion: judge guards by what was written.
         let writes_move = seen.contains_key("move");
+        if let Some(span) = approach_span {
+            self.approach_use(state, stmts, span, writes_move);
+        }
         self.transition_analysis(state, &state_transitions, writes_move, force, has_force_axes, scope);
 
         if self.error_count() > errors_before {
@@ -305,7 +325,54 @@ impl Checker<'_> {
             gains,
             entry,
             transitions: ids_out,
+            approach,
         })
+    }
+
+    /// `approach within D at V`: a positive distance and a positive speed.
+    fn approach(&mut self, within: &ast::Expr, speed: &ast::Expr) -> Option<ir::Approach> {
+        let within_value = self.quantity(within, Dim::Length, "the approach distance");
+        let within_m = self.positive(within_value, within.span, "the approach distance");
+        let speed_value = self.quantity(speed, Dim::Speed, "the approach speed");
+        let speed_mps = self.positive(speed_value, speed.span, "the approach speed");
+        Some(ir::Approach {
+            within_m: within_m?,
+            speed_mps: speed_mps?,
+        })
+    }
+
+    /// An `approach` needs a motion to slow down, and is pointless without a force guard.
+    fn approach_use(&mut self, state: &ast::State, stmts: &[ast::Stmt], span: Span, writes_move: bool) {
+        if !writes_move {
+            let diag = self
+                .diag(
+                    Code::ApproachWithoutMove,
+                    span,
+                    format!("state `{}` declares an approach but runs no motion", state.name.name),
+                    "no `move` to slow down",
+                )
+                .help("add `move MOTION` to this state, or declare the approach in the state that moves towards the contact");
+            self.report(diag);
+            return;
+        }
+        let watches_force = stmts.iter().any(|stmt| match &stmt.kind {
+            StmtKind::Transition { guard, .. } => mentions_force(guard),
+            _ => false,
+        });
+        if !watches_force {
+            let diag = self
+                .diag(
+                    Code::ApproachWithoutForceGuard,
+                    span,
+                    format!(
+                        "state `{}` approaches a contact that no guard waits for",
+                        state.name.name
+                    ),
+                    "no `force(...)` guard in this state",
+                )
+                .help("add `on force(FRAME.z) >= THRESHOLD -> STATE` to leave the state on contact, or remove the approach");
+            self.report(diag);
+        }
     }
 
     /// The axes of a `control` statement as position (`true`) or force (`false`).

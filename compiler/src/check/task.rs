@@ -1,4 +1,4 @@
-//! Tasks: steps and fallbacks naming skills in scope, their inputs and overrides.
+//! Tasks: steps and fallbacks naming skills in scope, their inputs, overrides and limits.
 
 use super::{join_ticked, suggest, Checker};
 use crate::ast;
@@ -73,7 +73,7 @@ impl Checker<'_> {
             let bound = self.bind_args(
                 &step.skill.name,
                 &step.args,
-                &["demo", "learned", "force_scale", "speed", "goal_offset"],
+                &["demo", "learned", "force_scale", "speed", "goal_offset", "limits"],
                 0,
             );
             let input = match (bound.get("demo"), bound.get("learned")) {
@@ -127,6 +127,10 @@ impl Checker<'_> {
                     overrides.goal_offset_m = offset;
                 }
             }
+            let limits = bound
+                .get("limits")
+                .map(|expr| self.step_limits(expr))
+                .unwrap_or_default();
             let on_failure = match &step.on_failure {
                 None | Some(ast::OnFailure::Abort(_)) => Some(ir::OnFailure::Abort),
                 Some(ast::OnFailure::Fallback(name)) => {
@@ -170,6 +174,7 @@ impl Checker<'_> {
                     skill: step.skill.name.clone(),
                     input,
                     overrides,
+                    limits,
                     on_failure,
                     span: self.ir_span(step.span),
                 };

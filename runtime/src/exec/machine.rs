@@ -65,11 +65,18 @@ const GUARD_SPEED_MPS: f64 = 0.025;
 /// search range \[m\] (scene changes of a few centimetres).
 const GUARD_ZONE_M: f64 = 0.03;
 
-/// The guarded approach of a state, if it waits for contact: a force guard on one of its
-/// transitions. Its search (`extend ... at V, up to D`) gives the speed and the zone; without
-/// one, [`GUARD_SPEED_MPS`] within [`GUARD_ZONE_M`].
+/// The guarded approach of a state with a motion: the one it declares (`approach within D at
+/// V`), whatever its guards; otherwise, if it waits for contact (a force guard on one of its
+/// transitions), its search (`extend ... at V, up to D`) gives the speed and the zone, and
+/// without one [`GUARD_SPEED_MPS`] within [`GUARD_ZONE_M`].
 fn guarded_approach(skill: &ir::Skill, active: &ir::ActiveState) -> Option<GuardedApproach> {
     active.motion?;
+    if let Some(declared) = active.approach {
+        return Some(GuardedApproach {
+            zone_m: declared.within_m,
+            speed_mps: declared.speed_mps,
+        });
+    }
     let mut expects_contact = false;
     let mut search = None;
     for id in &active.transitions {

@@ -29,7 +29,7 @@ mod run;
 mod session;
 
 pub use bind::{bind, BindError, BoundSkill};
-pub use limits::{learned_peak_force, learned_workspace, limits_for};
+pub use limits::{apply_limits, learned_peak_force, learned_workspace, limits_for};
 pub use log::{RunLog, Tick};
 pub use rig::Rig;
 pub use run::{replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit};

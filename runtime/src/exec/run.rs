@@ -32,8 +32,12 @@ pub struct ExecOptions {
     pub log: bool,
     /// Stiffness of the replay baseline and of the pre-positioning move, per axis (N/m, N m/rad).
     pub replay_stiffness: [f64; 6],
-    /// Safety limits set by the user, applied in order over the defaults the learned file implies
-    /// (names as in [`crate::safety::Limits::set`], SI values).
+    /// Safety limits a task step sets (its `limits: { }`), applied after the skill's own
+    /// `limits { }` block and before [`ExecOptions::limits`].
+    pub step_limits: Vec<ir::Limit>,
+    /// Safety limits set by the user, applied in order last: over the defaults the learned file
+    /// implies, the skill's `limits { }` and the step's (names as in
+    /// [`crate::safety::Limits::set`], SI values).
     pub limits: Vec<(String, f64)>,
 }
 
@@ -46,6 +50,7 @@ impl Default for ExecOptions {
             prepose: true,
             log: true,
             replay_stiffness: [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0],
+            step_limits: Vec::new(),
             limits: Vec::new(),
         }
     }
@@ -157,8 +162,8 @@ fn prepose_for(
 }
 
 /// Runs a bound skill on a rig until a terminal state (or the time limit), under the
-/// supervisor with the limits [`limits_for`] gives (defaults from the learned file, then
-/// [`ExecOptions::limits`]). A reflex ends the run as a failure whose message names the time,
+/// supervisor with the limits [`limits_for`] gives (defaults from the learned file, then the
+/// skill's `limits { }`, [`ExecOptions::step_limits`] and [`ExecOptions::limits`]). A reflex ends the run as a failure whose message names the time,
 /// the state and its `.skill` line, the quantity, the measured value and the limit.
 pub fn run_skill(
     bound: &BoundSkill<'_>,
@@ -166,7 +171,7 @@ pub fn run_skill(
     options: &ExecOptions,
     log: Option<&mut RunLog>,
 ) -> Result<RunReport, ExecError> {
-    let start_s = arm_supervisor(bound.learned, rig, options)?;
+    let start_s = arm_supervisor(bound.learned, &bound.skill.limits, rig, options)?;
     let mut visits = Vec::new();
     let result = skill_loop(bound, rig, options, log, &mut visits, start_s);
     let location_of = |state: &str| {
@@ -180,16 +185,23 @@ pub fn run_skill(
     finish(result, rig, visits, start_s, location_of)
 }
 
-/// Sets the supervisor's limits for a run of `learned` and starts its figures afresh; returns
-/// the run's start time.
-fn arm_supervisor(learned: &Learned, rig: &mut Rig<'_>, options: &ExecOptions) -> Result<f64, ExecError> {
+/// Sets the supervisor's limits for a run of `learned` (with the limits its skill declares, if
+/// any) and starts its figures afresh; returns the run's start time.
+fn arm_supervisor(
+    learned: &Learned,
+    skill_limits: &[ir::Limit],
+    rig: &mut Rig<'_>,
+    options: &ExecOptions,
+) -> Result<f64, ExecError> {
     rig.sense();
     let tool = rig.tool().translation.vector;
+    let declared: Vec<&ir::Limit> = skill_limits.iter().chain(&options.step_limits).collect();
     let limits = limits_for(
         learned,
         rig.flange_to_tool(),
         Some([tool.x, tool.y, tool.z]),
         options.overrides.force_scale,
+        &declared,
         &options.limits,
     )
     .map_err(|err| ExecError::Limits {
@@ -340,7 +352,8 @@ fn skill_loop(
 }
 
 /// The thesis's baseline: the demonstration replayed under pure impedance control, with no
-/// force control and no contact adaptation. Segments run in order: a segment with a learned
+/// force control and no contact adaptation. It has no skill, so no skill's `limits { }`: the
+/// supervisor uses the defaults, [`ExecOptions::step_limits`] and [`ExecOptions::limits`]. Segments run in order: a segment with a learned
 /// motion replays it from the current pose; a segment without one (e.g. the press itself)
 /// holds the pose for the segment's duration, as the demonstration did.
 pub fn run_replay(
@@ -349,7 +362,7 @@ pub fn run_replay(
     options: &ExecOptions,
     log: Option<&mut RunLog>,
 ) -> Result<RunReport, ExecError> {
-    let start_s = arm_supervisor(learned, rig, options)?;
+    let start_s = arm_supervisor(learned, &[], rig, options)?;
     let mut visits = Vec::new();
     let result = replay_loop(learned, rig, options, log, &mut visits, start_s);
     finish(result, rig, visits, start_s, |_| None)

@@ -136,6 +136,7 @@ fn task_on(
     let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>| {
         let step_options = ExecOptions {
             overrides: task_step.step.overrides,
+            step_limits: task_step.step.limits.clone(),
             prepose: first && options.prepose,
             ..options.clone()
         };

@@ -122,15 +122,20 @@ impl Limits {
         }
     }
 
-    /// Sets one limit by its name in the language and on the command line (`force`, `moment`,
-    /// `speed`, `angular_speed`, `joint_margin`, `joint_speed`, `saturation`, `tracking`,
-    /// `tracking_angle`), in SI units. `inf` switches a check off.
+    /// Sets one limit by its name in the language and on the command line (one of
+    /// [`LIMIT_NAMES`]: `force`, `moment`, `speed`, `angular_speed`, `joint_margin`,
+    /// `joint_speed`, `saturation`, `tracking`, `tracking_angle`), in SI units. `inf` switches a
+    /// check off.
     pub fn set(&mut self, name: &str, value: f64) -> Result<(), LimitError> {
         if value.is_nan() || value <= 0.0 {
             return Err(LimitError::NotPositive {
                 name: name.to_string(),
                 value,
             });
+        }
+        // Only the table's names: a name below that it lacks cannot be set.
+        if skill_ir::limit_spec(name).is_none() {
+            return Err(LimitError::Unknown { name: name.to_string() });
         }
         let slot = match name {
             "force" => &mut self.force_n,
@@ -158,18 +163,10 @@ impl Limits {
     }
 }
 
-/// The names [`Limits::set`] accepts, with their units, for help texts.
-pub const LIMIT_NAMES: &[(&str, &str)] = &[
-    ("force", "N"),
-    ("moment", "N m"),
-    ("speed", "m/s"),
-    ("angular_speed", "rad/s"),
-    ("joint_margin", "rad"),
-    ("joint_speed", "fraction of the velocity limit"),
-    ("saturation", "s"),
-    ("tracking", "m"),
-    ("tracking_angle", "rad"),
-];
+/// The names [`Limits::set`] accepts, with their dimensions (SI units) and what they bound: the
+/// IR's one table, which the compiler checks `limits { }` blocks against
+/// (`limit_table_and_set_agree` checks that `set` takes exactly these).
+pub const LIMIT_NAMES: &[skill_ir::LimitSpec] = skill_ir::LIMITS;
 
 /// A limit that cannot be set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -194,7 +191,7 @@ pub enum LimitError {
 fn known_names() -> String {
     LIMIT_NAMES
         .iter()
-        .map(|(name, _)| format!("`{name}`"))
+        .map(|spec| format!("`{}`", spec.name))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -212,6 +209,7 @@ impl fmt::Display for Workspace {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::safety::Quantity;
 
     #[test]
     fn force_limit_keeps_room_above_the_learned_peak() {
@@ -232,6 +230,56 @@ mod tests {
         assert_eq!(box_.outside_by([0.0, 0.0, 0.4]), 0.0);
         assert!((box_.outside_by([0.0, 0.0, 0.1]) - 0.1).abs() < 1e-12);
         assert!(Workspace::around([].iter(), 0.1).is_none());
+    }
+
+    #[test]
+    fn limit_table_and_set_agree() {
+        // Every name of the table sets exactly one field, each a different one.
+        let base = Limits::for_skill(10.0, None);
+        let mut changed = Vec::new();
+        for spec in LIMIT_NAMES {
+            let mut limits = base.clone();
+            limits
+                .set(spec.name, 1234.5)
+                .unwrap_or_else(|err| panic!("{}: {err}", spec.name));
+            let fields = [
+                limits.force_n,
+                limits.moment_nm,
+                limits.tool_speed_mps,
+                limits.tool_angular_speed_radps,
+                limits.joint_margin,
+                limits.joint_speed_fraction,
+                limits.torque_saturation_s,
+                limits.tracking_error_m,
+                limits.tracking_error_rad,
+            ];
+            let set: Vec<usize> = (0..fields.len()).filter(|&i| fields[i] == 1234.5).collect();
+            assert_eq!(set.len(), 1, "`{}` sets {set:?}", spec.name);
+            assert!(
+                !changed.contains(&set[0]),
+                "`{}` sets a field another name sets",
+                spec.name
+            );
+            changed.push(set[0]);
+        }
+        // Every field is reached by a name of the table (and `set` refuses names outside it).
+        assert_eq!(changed.len(), 9, "every settable field has a name in the table");
+        // Each quantity a reflex names as loosenable is in the table.
+        for quantity in [
+            Quantity::ContactForce,
+            Quantity::ContactMoment,
+            Quantity::ToolSpeed,
+            Quantity::ToolAngularSpeed,
+            Quantity::JointMargin,
+            Quantity::JointSpeed,
+            Quantity::TorqueSaturation,
+            Quantity::TrackingError,
+            Quantity::TrackingAngle,
+            Quantity::ArmContact,
+        ] {
+            let name = quantity.limit_name().expect("a limit name");
+            assert!(skill_ir::limit_spec(name).is_some(), "`{name}`");
+        }
     }
 
     #[test]

@@ -18,10 +18,14 @@ use crate::learn::constraint::ConstraintKind;
 pub const LEARNED_VERSION: u32 = 1;
 
 /// A 64-bit FNV-1a hash of the skill's IR (its canonical JSON), in hex: a learned file is only
-/// used with the IR it was learned for.
+/// used with the IR it was learned for. The skill's `limits { }` are left out: like `--limit`,
+/// they tune the supervisor and change nothing learned, so tightening one needs no new learning.
 pub fn ir_hash(skill: &skill_ir::Skill) -> String {
     // Spans and docs do not change what is learned or run: hash the rest.
     let mut value = serde_json::to_value(skill).unwrap_or_default();
+    if let serde_json::Value::Object(map) = &mut value {
+        map.remove("limits");
+    }
     strip_positions(&mut value);
     let text = value.to_string();
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;

@@ -635,3 +635,67 @@ fn timeline(path: &Path, runs: &[Trial<'_>]) -> DrawResult {
     root.present()?;
     Ok(())
 }
+
+/// One draw of a sweep, as its plot shows it.
+#[derive(Debug, Clone, Copy)]
+pub struct SweepPoint<'a> {
+    /// The skill.
+    pub skill: &'a str,
+    /// Height change of the scene \[m\].
+    pub height_m: f64,
+    /// Tilt \[deg\].
+    pub tilt_deg: f64,
+    /// Whether the trial succeeded.
+    pub success: bool,
+}
+
+/// A sweep's draws, one panel per skill: height change against tilt, successes green and
+/// failures red.
+pub fn sweep(path: &Path, points: &[SweepPoint<'_>]) -> Result<(), String> {
+    sweep_panels(path, points).map_err(|err| err.to_string())
+}
+
+fn sweep_panels(path: &Path, points: &[SweepPoint<'_>]) -> DrawResult {
+    let mut skills: Vec<&str> = Vec::new();
+    for point in points {
+        if !skills.contains(&point.skill) {
+            skills.push(point.skill);
+        }
+    }
+    let panels = skills.len().max(1);
+    let root = SVGBackend::new(path, (420 * panels as u32, 400)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let areas = root.split_evenly((1, panels));
+    let height = points.iter().map(|p| p.height_m.abs() * 100.0).fold(1.0, f64::max) * 1.05;
+    let tilt = points.iter().map(|p| p.tilt_deg.abs()).fold(1.0, f64::max) * 1.05;
+    for (area, skill) in areas.iter().zip(&skills) {
+        let mine: Vec<&SweepPoint<'_>> = points.iter().filter(|p| p.skill == *skill).collect();
+        let ok = mine.iter().filter(|p| p.success).count();
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!("{skill}: {ok}/{} succeeded", mine.len()),
+                ("sans-serif", 15),
+            )
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(45)
+            .build_cartesian_2d(-height..height, -tilt..tilt)?;
+        chart
+            .configure_mesh()
+            .x_desc("height change [cm] (+: nearer)")
+            .y_desc("tilt [deg]")
+            .draw()?;
+        chart.draw_series(
+            mine.iter()
+                .filter(|p| p.success)
+                .map(|p| Circle::new((p.height_m * 100.0, p.tilt_deg), 3, GREEN.mix(0.7).filled())),
+        )?;
+        chart.draw_series(
+            mine.iter()
+                .filter(|p| !p.success)
+                .map(|p| Cross::new((p.height_m * 100.0, p.tilt_deg), 5, RED.stroke_width(2))),
+        )?;
+    }
+    root.present()?;
+    Ok(())
+}

@@ -118,7 +118,6 @@ pub fn measure(
         .filter(|(_, name)| contact_states.contains(name))
         .map(|(i, _)| i as u32)
         .collect();
-    let prepose = log.states.iter().position(|s| s == "prepose").map(|i| i as u32);
 
     let mut metrics = Metrics::default();
     let mut sq = 0.0;
@@ -129,10 +128,9 @@ pub fn measure(
     let replay_profile = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01));
     let mut last_contact_z: Vec<f64> = Vec::new();
     for tick in &log.ticks {
-        if Some(tick.state) != prepose {
-            let f = Vector3::new(tick.wrench_base[0], tick.wrench_base[1], tick.wrench_base[2]).norm();
-            metrics.peak_force_n = metrics.peak_force_n.max(f);
-        }
+        // Every tick counts, pre-positioning too: a bump on the way to the start is a bump.
+        let f = Vector3::new(tick.wrench_base[0], tick.wrench_base[1], tick.wrench_base[2]).norm();
+        metrics.peak_force_n = metrics.peak_force_n.max(f);
         if !contact_index.contains(&tick.state) {
             visit_start = None;
             continue;

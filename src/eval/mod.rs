@@ -5,6 +5,7 @@
 pub mod metrics;
 pub mod real;
 mod report;
+pub mod sweep;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -52,6 +53,44 @@ pub struct EvalArgs {
     /// Tighten or loosen a safety limit for every trial, e.g. `--limit force=60` (see `skillc run`).
     #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = crate::run_cmd::parse_limit)]
     pub limits: Vec<(String, f64)>,
+    /// Instead of the listed variants, reproduce each skill in N scenes drawn at random within
+    /// its `sweep` ranges (default: height ±10 cm, tilt ±10°, position ±3 cm, friction 0.2-1.0,
+    /// sensor noise 1-3×); report success rates and failures by reason.
+    #[arg(long, value_name = "N", value_parser = sweep::parse_draws)]
+    pub sweep: Option<usize>,
+    /// The sweep's seed: the same seed draws the same scenes.
+    #[arg(long, default_value_t = 1, requires = "sweep")]
+    pub seed: u64,
+    /// Run only share K of M of the sweep's draws (for a Slurm array or a CI matrix); join the
+    /// shares' summaries with `skillc eval merge`.
+    #[arg(long, value_name = "K/M", value_parser = sweep::parse_partition, requires = "sweep")]
+    pub partition: Option<sweep::Partition>,
+    /// A sweep fails (exit 1) when a skill's success rate is below this.
+    #[arg(long, default_value_t = 0.95, value_parser = parse_rate, requires = "sweep")]
+    pub min_success: f64,
+    #[command(subcommand)]
+    pub command: Option<EvalCommand>,
+}
+
+/// Subcommands of `skillc eval`.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum EvalCommand {
+    /// Join the `summary.json` of a sweep's shares (`--partition K/M`) into one report.
+    Merge {
+        /// Where to write the joined report.
+        #[arg(long, default_value = "report")]
+        out: PathBuf,
+        /// A success rate below this fails the merge (exit 1).
+        #[arg(long, default_value_t = 0.95, value_parser = parse_rate)]
+        min_success: f64,
+        /// The shares' `summary.json` files.
+        #[arg(required = true)]
+        summaries: Vec<PathBuf>,
+    },
+}
+
+fn parse_rate(text: &str) -> Result<f64, String> {
+    crate::limits::check("the success rate", text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?, (0.0, 1.0), "")
 }
 
 /// A trials file.
@@ -81,6 +120,9 @@ pub struct SkillTrials {
     pub criteria: Criteria,
     /// The scene variants.
     pub variants: Vec<Variant>,
+    /// The ranges `--sweep` draws this skill's scenes from.
+    #[serde(default)]
+    pub sweep: sweep::SweepRanges,
 }
 
 /// Success thresholds of a trial.
@@ -103,7 +145,7 @@ pub struct Criteria {
 pub const DEFAULT_PEAK_BOUND: [f64; 2] = [2.0, 5.0];
 
 /// The version of `summary.json`'s layout; bumped on every change to its keys.
-pub const SUMMARY_VERSION: u32 = 2;
+pub const SUMMARY_VERSION: u32 = 3;
 
 /// A scene variant.
 #[derive(Debug, Clone, Deserialize)]
@@ -117,7 +159,7 @@ pub struct Variant {
 }
 
 /// One trial's result (an entry of `summary.json`'s `trials`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct TrialResult {
     /// The skill's name.
     pub skill: String,
@@ -158,6 +200,12 @@ pub struct TrialResult {
     pub error: bool,
     /// States visited with entry times, `state@t`.
     pub states: Vec<String>,
+    /// The scene a sweep drew (sweeps only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub draw: Option<sweep::Draw>,
+    /// The scene overrides of the trial (`skillc run --set ...` repeats it).
+    #[serde(default)]
+    pub set: Vec<String>,
 }
 
 /// A learned skill ready for trials (it binds), or why it is not.
@@ -175,6 +223,12 @@ struct Job {
     skill: usize,
     variant: usize,
     replay: bool,
+}
+
+/// One draw of a sweep to run.
+struct DrawJob {
+    skill: usize,
+    index: usize,
 }
 
 /// What one trial produced, kept for plots.
@@ -199,7 +253,15 @@ impl Outcome {
 
 /// Runs `skillc eval`.
 pub fn run(args: &EvalArgs) -> u8 {
-    match evaluate(args) {
+    let result = match &args.command {
+        Some(EvalCommand::Merge {
+            out,
+            min_success,
+            summaries,
+        }) => merge(out, *min_success, summaries),
+        None => evaluate(args),
+    };
+    match result {
         Ok(code) => code,
         Err(failure) => failure.report(),
     }
@@ -273,9 +335,8 @@ fn bind_prepared(prepared: &Prepared) -> Bound<'_> {
     }
 }
 
-fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String, f64)]) -> Outcome {
-    let variant = &prepared.spec.variants[job.variant];
-    let mode_name = if job.replay { "replay" } else { "skill" };
+fn run_job(prepared: &Prepared, bound: &Bound<'_>, variant: &Variant, replay: bool, limits: &[(String, f64)]) -> Outcome {
+    let mode_name = if replay { "replay" } else { "skill" };
     let failed = |message: String| Outcome {
         result: TrialResult {
             skill: prepared.name.clone(),
@@ -297,6 +358,8 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String,
             torque_limit_s: 0.0,
             error: true,
             states: Vec::new(),
+            draw: None,
+            set: variant.set.clone(),
         },
         log: RunLog::default(),
     };
@@ -309,13 +372,17 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String,
         Err(Failure::Input(message) | Failure::Usage(message)) => return failed(message),
         Err(Failure::Closed) => return failed("standard output closed".to_string()),
     };
-    let mode = if job.replay {
+    let mode = if replay {
         Mode::Replay(bound.learned)
     } else {
         Mode::Skill(bound)
     };
+    // Trials start where the scene puts the arm (`robot.q0`: the demonstration's start in the
+    // shipped scenes, higher where the objects moved up) and the skill's first motion runs from
+    // there: moving to the demonstrated start first would drive into objects that moved up.
     let options = ExecOptions {
         limits: limits.to_vec(),
+        prepose: false,
         ..ExecOptions::default()
     };
     let (report, log) = match simulate(&scene, mode, &options) {
@@ -323,11 +390,11 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String,
         Err(err) => return failed(error_chain(&err)),
     };
     let frame_z = |t: f64| replay_frame_z(bound, plan, t);
-    let metrics: Metrics = metrics::measure(&log, plan, job.replay, &frame_z);
+    let metrics: Metrics = metrics::measure(&log, plan, replay, &frame_z);
     let learned_force = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01).peak());
     let criteria = prepared.spec.criteria;
     let [scale, offset] = criteria.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
-    let peak_bound = (!job.replay).then_some(scale * prepared.demo_peak_n + offset);
+    let peak_bound = (!replay).then_some(scale * prepared.demo_peak_n + offset);
     // The first reason a trial fails, in order of gravity. Replays are the baseline: they are
     // never a success, and their reason says why they would have failed.
     let reason = if let Some(violation) = &report.reflex {
@@ -354,7 +421,7 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String,
     } else {
         None
     };
-    let success = !job.replay && reason.is_none();
+    let success = !replay && reason.is_none();
     let safety = &report.safety;
     Outcome {
         result: TrialResult {
@@ -381,6 +448,8 @@ fn run_job(prepared: &Prepared, bound: &Bound<'_>, job: &Job, limits: &[(String,
                 .iter()
                 .map(|v| format!("{}@{:.2}", v.state, v.enter_s))
                 .collect(),
+            draw: None,
+            set: variant.set.clone(),
         },
         log,
     }
@@ -432,6 +501,9 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let prepared: Vec<Prepared> =
         pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
     let bound: Vec<Bound<'_>> = prepared.iter().map(bind_prepared).collect();
+    if let Some(draws) = args.sweep {
+        return run_sweep(args, draws, &prepared, &bound, &pool, &progress, started);
+    }
     let mut jobs = Vec::new();
     for (skill, prep) in prepared.iter().enumerate() {
         for variant in 0..prep.spec.variants.len() {
@@ -454,7 +526,14 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let outcomes: Vec<Outcome> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let outcome = run_job(&prepared[job.skill], &bound[job.skill], job, &args.limits);
+                let prep = &prepared[job.skill];
+                let outcome = run_job(
+                    prep,
+                    &bound[job.skill],
+                    &prep.spec.variants[job.variant],
+                    job.replay,
+                    &args.limits,
+                );
                 progress.inc(1);
                 outcome
             })
@@ -548,4 +627,128 @@ fn prepared_views<'a>(prepared: &'a [Prepared], bound: &'a [Bound<'a>]) -> Vec<S
             criteria: p.spec.criteria,
         })
         .collect()
+}
+
+/// What a sweep needs of each skill's scene: the scene as written and its robot.
+type SweepBase = Result<(skill_runtime::sim::Scene, skill_runtime::robot::Robot), String>;
+
+fn sweep_base(prepared: &Prepared) -> SweepBase {
+    prepared.spec.sweep.validate(&prepared.name)?;
+    let scene = load_scene(&prepared.base_dir.join(&prepared.spec.scene), &[]).map_err(|failure| match failure {
+        Failure::Input(message) | Failure::Usage(message) => message,
+        Failure::Closed => "standard output closed".to_string(),
+    })?;
+    let robot = skill_runtime::robot::Robot::from_urdf_file(&scene.urdf_path(), scene.spec().robot.tool.as_deref())
+        .map_err(|err| error_chain(&err))?;
+    Ok((scene, robot))
+}
+
+/// One draw of a sweep: the scene drawn, the start raised out of the objects, the skill run.
+fn run_draw(prepared: &Prepared, bound: &Bound<'_>, base: &SweepBase, index: usize, args: &EvalArgs) -> Outcome {
+    let ranges = &prepared.spec.sweep;
+    let mut draw = sweep::draw(ranges, args.seed, &prepared.name, index);
+    let sets = base
+        .as_ref()
+        .map_err(Clone::clone)
+        .and_then(|(scene, robot)| sweep::scene_sets(scene, robot, &mut draw, args.seed));
+    let variant = Variant {
+        name: format!("draw #{index}"),
+        set: sets.as_ref().cloned().unwrap_or_default(),
+    };
+    let mut outcome = match (&sets, bound) {
+        (Err(message), _) => run_job(prepared, &Err(message.clone()), &variant, false, &args.limits),
+        _ => run_job(prepared, bound, &variant, false, &args.limits),
+    };
+    outcome.result.draw = Some(draw);
+    // A sweep keeps its results, not its tick logs (hundreds of runs of ~10^4 ticks each).
+    outcome.log = RunLog::default();
+    outcome
+}
+
+fn run_sweep(
+    args: &EvalArgs,
+    draws: usize,
+    prepared: &[Prepared],
+    bound: &[Bound<'_>],
+    pool: &rayon::ThreadPool,
+    progress: &indicatif::ProgressBar,
+    started: Instant,
+) -> Result<u8, Failure> {
+    let partition = args.partition.unwrap_or(sweep::Partition::ALL);
+    let bases: Vec<SweepBase> = prepared.iter().map(sweep_base).collect();
+    let jobs: Vec<DrawJob> = (0..prepared.len())
+        .flat_map(|skill| (0..draws).map(move |index| DrawJob { skill, index }))
+        .enumerate()
+        .filter(|(global, _)| partition.runs(*global))
+        .map(|(_, job)| job)
+        .collect();
+    progress.set_length(jobs.len() as u64);
+    progress.set_message("sweep");
+    let outcomes: Vec<Outcome> = pool.install(|| {
+        jobs.par_iter()
+            .map(|job| {
+                let outcome = run_draw(&prepared[job.skill], &bound[job.skill], &bases[job.skill], job.index, args);
+                progress.inc(1);
+                outcome
+            })
+            .collect()
+    });
+    progress.finish_and_clear();
+    let summary = sweep::SweepSummary {
+        format_version: SUMMARY_VERSION,
+        kind: "sweep".to_string(),
+        seed: args.seed,
+        per_skill: draws,
+        partitions: vec![partition.to_string()],
+        ranges: prepared.iter().map(|p| (p.name.clone(), p.spec.sweep)).collect(),
+        elapsed_s: started.elapsed().as_secs_f64(),
+        trials: outcomes.into_iter().map(|o| o.result).collect(),
+    };
+    finish_sweep(&args.out, &summary, args.min_success)
+}
+
+/// Prints and writes a sweep's (or merged sweeps') report; exit 1 when a skill's success rate is
+/// below `min_success`.
+fn finish_sweep(out: &Path, summary: &sweep::SweepSummary, min_success: f64) -> Result<u8, Failure> {
+    let text = sweep::table(summary);
+    crate::out::print(&format!(
+        "{text}{} trials in {:.1} s\n",
+        summary.trials.len(),
+        summary.elapsed_s
+    ))?;
+    let written = sweep::write(out, summary, &text)
+        .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", out.display())))?;
+    crate::out::print(&format!("report: {}\n", written.display()))?;
+    let low: Vec<(String, f64)> = sweep::rates(&summary.trials)
+        .into_iter()
+        .filter(|(_, rate)| *rate < min_success)
+        .collect();
+    for (skill, rate) in &low {
+        eprintln!(
+            "skill `{skill}` succeeded in {:.1} % of its draws, below the required {:.1} %",
+            rate * 100.0,
+            min_success * 100.0
+        );
+    }
+    Ok(u8::from(!low.is_empty()))
+}
+
+/// `skillc eval merge`.
+fn merge(out: &Path, min_success: f64, summaries: &[PathBuf]) -> Result<u8, Failure> {
+    let mut parts = Vec::new();
+    for path in summaries {
+        let text = std::fs::read_to_string(path)
+            .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
+        let part: sweep::SweepSummary = serde_json::from_str(&text).map_err(|err| {
+            Failure::Input(format!(
+                "`{}` is not a sweep summary of this skillc (written by `skillc eval --sweep`): {err}",
+                path.display()
+            ))
+        })?;
+        parts.push((path.display().to_string(), part));
+    }
+    let inputs: Vec<&Path> = summaries.iter().map(PathBuf::as_path).collect();
+    crate::atomic::refuse_inputs(&out.join("summary.json"), "--out", &inputs).map_err(Failure::Usage)?;
+    let merged = sweep::merge(parts).map_err(Failure::Input)?;
+    finish_sweep(out, &merged, min_success)
 }

@@ -11,6 +11,10 @@ use crate::plant::{Observation, Plant};
 use crate::robot::RobotError;
 use crate::safety::{Limits, SafetyStats, Supervisor, REFLEX_HOLD_S};
 
+/// The contact force that stops pre-positioning \[N\]: well above wrist-sensor noise (0.2 N
+/// and a few times that), well below a force that harms a part.
+pub(super) const PREPOSE_CONTACT_N: f64 = 5.0;
+
 /// The robot side of a run: plant, controller, and the flange-to-tool transform.
 pub struct Rig<'p> {
     /// The plant driven.
@@ -209,7 +213,8 @@ impl<'p> Rig<'p> {
         cmd
     }
 
-    /// Moves the flange to `target` in free space along a minimum-jerk path, then holds briefly.
+    /// Moves the flange to `target` in free space along a minimum-jerk path, then holds briefly;
+    /// stops and holds where it is when the tool meets something ([`PREPOSE_CONTACT_N`]).
     pub(super) fn prepose(
         &mut self,
         target: &Isometry3<f64>,
@@ -224,9 +229,24 @@ impl<'p> Rig<'p> {
         let hold = 0.3;
         let state = log.as_mut().map_or(0, |log| log.state_index("prepose"));
         let steps = ((duration + hold) / options.dt_s).round() as usize;
+        // A guarded move: something in the way stops it where it is felt, and what runs next
+        // starts from there (its first motion runs from the current pose).
+        let mut stopped_at: Option<f64> = None;
         for step in 0..steps {
             if step > 0 {
                 self.sense();
+            }
+            let force = self.obs.wrench_base.fixed_rows::<3>(0).norm();
+            if stopped_at.is_none() && force > PREPOSE_CONTACT_N {
+                stopped_at = Some(step as f64 * options.dt_s);
+            }
+            if let Some(stop_s) = stopped_at {
+                if step as f64 * options.dt_s > stop_s + hold {
+                    break;
+                }
+                let cmd = self.impedance_hold(self.tool(), Vector6::zeros(), options.replay_stiffness);
+                self.act(&cmd, state, "prepose", log.as_deref_mut(), options.dt_s)?;
+                continue;
             }
             let u = (step as f64 * options.dt_s / duration).min(1.0);
             let s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);

@@ -170,6 +170,13 @@ impl RapierPlant {
     /// Builds the simulation of a scene with an already loaded robot (the scene's `[robot] urdf`
     /// is not read again).
     pub fn new(robot: Robot, scene: &Scene, options: RapierOptions) -> Result<Self, SimError> {
+        let plant = Self::build(robot, scene, options)?;
+        plant.check_start(scene)?;
+        Ok(plant)
+    }
+
+    /// The plant of a scene, without the start check.
+    fn build(robot: Robot, scene: &Scene, options: RapierOptions) -> Result<Self, SimError> {
         let spec = scene.spec();
         let n = robot.dof();
         let q0 = spec.robot.q0.clone().unwrap_or_else(|| vec![0.0; n]);
@@ -279,12 +286,26 @@ impl RapierPlant {
         };
         plant.build_arm(&q0, sensor_link, options);
         plant.build_objects(scene);
-        plant.check_start(scene)?;
         Ok(plant)
     }
 
     /// Refuses a start with the tool inside an object (deeper than 0.1 mm, rapier's contact slop).
     fn check_start(&self, scene: &Scene) -> Result<(), SimError> {
+        match self.start_clearance() {
+            Some((distance, object)) if distance < -1e-4 => Err(SimError::StartsInside {
+                file: scene.file().to_owned(),
+                object,
+                depth_mm: -distance * 1e3,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The smallest distance between the tool's colliders and any object as the plant was built
+    /// (negative: how deep the tool starts inside), and that object's name; `None` when the
+    /// scene has no objects or the tool no collider. Distances beyond 1 m read as 1 m.
+    pub fn start_clearance(&self) -> Option<(f64, String)> {
+        let mut closest: Option<(f64, String)> = None;
         for tool in &self.tool_colliders {
             let Some(tool) = self.colliders.get(*tool) else {
                 continue;
@@ -303,20 +324,24 @@ impl RapierPlant {
                     continue;
                 };
                 let contact =
-                    rapier3d::parry::query::contact(&tool_pose, tool.shape(), object.position(), object.shape(), 0.0);
-                if let Ok(Some(contact)) = contact {
-                    let depth = -f64::from(contact.dist);
-                    if depth > 1e-4 {
-                        return Err(SimError::StartsInside {
-                            file: scene.file().to_owned(),
-                            object: name.clone(),
-                            depth_mm: depth * 1e3,
-                        });
-                    }
+                    rapier3d::parry::query::contact(&tool_pose, tool.shape(), object.position(), object.shape(), 1.0);
+                let distance = match contact {
+                    Ok(Some(contact)) => f64::from(contact.dist),
+                    _ => 1.0,
+                };
+                if closest.as_ref().is_none_or(|(d, _)| distance < *d) {
+                    closest = Some((distance, name.clone()));
                 }
             }
         }
-        Ok(())
+        closest
+    }
+
+    /// The start clearance of a scene ([`RapierPlant::start_clearance`]), measured without
+    /// refusing a start inside an object.
+    pub fn scene_start_clearance(robot: Robot, scene: &Scene) -> Result<Option<(f64, String)>, SimError> {
+        let plant = Self::build(robot, scene, RapierOptions::default())?;
+        Ok(plant.start_clearance())
     }
 
     /// The robot model the plant simulates.

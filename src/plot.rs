@@ -672,10 +672,7 @@ fn sweep_panels(path: &Path, points: &[SweepPoint<'_>]) -> DrawResult {
         let mine: Vec<&SweepPoint<'_>> = points.iter().filter(|p| p.skill == *skill).collect();
         let ok = mine.iter().filter(|p| p.success).count();
         let mut chart = ChartBuilder::on(area)
-            .caption(
-                format!("{skill}: {ok}/{} succeeded", mine.len()),
-                ("sans-serif", 15),
-            )
+            .caption(format!("{skill}: {ok}/{} succeeded", mine.len()), ("sans-serif", 15))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(45)

@@ -90,7 +90,12 @@ pub enum EvalCommand {
 }
 
 fn parse_rate(text: &str) -> Result<f64, String> {
-    crate::limits::check("the success rate", text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?, (0.0, 1.0), "")
+    crate::limits::check(
+        "the success rate",
+        text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?,
+        (0.0, 1.0),
+        "",
+    )
 }
 
 /// A trials file.
@@ -335,7 +340,13 @@ fn bind_prepared(prepared: &Prepared) -> Bound<'_> {
     }
 }
 
-fn run_job(prepared: &Prepared, bound: &Bound<'_>, variant: &Variant, replay: bool, limits: &[(String, f64)]) -> Outcome {
+fn run_job(
+    prepared: &Prepared,
+    bound: &Bound<'_>,
+    variant: &Variant,
+    replay: bool,
+    limits: &[(String, f64)],
+) -> Outcome {
     let mode_name = if replay { "replay" } else { "skill" };
     let failed = |message: String| Outcome {
         result: TrialResult {
@@ -687,7 +698,13 @@ fn run_sweep(
     let outcomes: Vec<Outcome> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let outcome = run_draw(&prepared[job.skill], &bound[job.skill], &bases[job.skill], job.index, args);
+                let outcome = run_draw(
+                    &prepared[job.skill],
+                    &bound[job.skill],
+                    &bases[job.skill],
+                    job.index,
+                    args,
+                );
                 progress.inc(1);
                 outcome
             })

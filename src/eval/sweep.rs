@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Rotation3, Translation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
-use skill_runtime::robot::Robot;
 use skill_runtime::rng::SplitMix64;
+use skill_runtime::robot::Robot;
 use skill_runtime::sim::{RapierPlant, Scene};
 
 use super::TrialResult;
@@ -64,9 +64,15 @@ impl SweepRanges {
                 return bad(key, &format!("is {value}; it must lie between 0 and {max}"));
             }
         }
-        for (key, [low, high], max) in [("friction", self.friction, 2.0), ("noise_scale", self.noise_scale, 100.0)] {
+        for (key, [low, high], max) in [
+            ("friction", self.friction, 2.0),
+            ("noise_scale", self.noise_scale, 100.0),
+        ] {
             if !(low.is_finite() && high.is_finite() && 0.0 <= low && low <= high && high <= max) {
-                return bad(key, &format!("is [{low}, {high}]; write [low, high] with 0 <= low <= high <= {max}"));
+                return bad(
+                    key,
+                    &format!("is [{low}, {high}]; write [low, high] with 0 <= low <= high <= {max}"),
+                );
             }
         }
         Ok(())
@@ -171,7 +177,9 @@ pub fn parse_draws(text: &str) -> Result<usize, String> {
         .parse()
         .map_err(|_| format!("`{text}` is not a whole number"))?;
     if n == 0 || n > MAX_DRAWS {
-        return Err(format!("the number of draws per skill must lie in 1..={MAX_DRAWS}, got {n}"));
+        return Err(format!(
+            "the number of draws per skill must lie in 1..={MAX_DRAWS}, got {n}"
+        ));
     }
     Ok(n)
 }
@@ -179,9 +187,9 @@ pub fn parse_draws(text: &str) -> Result<usize, String> {
 /// The random generator of one draw: a function of the seed, the skill and the index only.
 fn generator(seed: u64, skill: &str, index: usize) -> SplitMix64 {
     // FNV-1a of the name: stable across runs and platforms (std's hasher is not).
-    let name = skill
-        .bytes()
-        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3));
+    let name = skill.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
     let mut rng = SplitMix64::new(seed ^ name.rotate_left(17) ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     rng.next_u64();
     rng
@@ -231,9 +239,18 @@ pub fn scene_sets(scene: &Scene, robot: &Robot, draw: &mut Draw, seed: u64) -> R
         sets.push(format!("objects.{name}.friction={:.6}", draw.friction));
     }
     let sensor = &spec.sensor;
-    sets.push(format!("sensor.noise_force_n={:.9}", sensor.noise_force_n * draw.noise_scale));
-    sets.push(format!("sensor.noise_torque_nm={:.9}", sensor.noise_torque_nm * draw.noise_scale));
-    sets.push(format!("sensor.seed={}", seed.wrapping_add(draw.index as u64) % (1 << 53)));
+    sets.push(format!(
+        "sensor.noise_force_n={:.9}",
+        sensor.noise_force_n * draw.noise_scale
+    ));
+    sets.push(format!(
+        "sensor.noise_torque_nm={:.9}",
+        sensor.noise_torque_nm * draw.noise_scale
+    ));
+    sets.push(format!(
+        "sensor.seed={}",
+        seed.wrapping_add(draw.index as u64) % (1 << 53)
+    ));
 
     let mut moved = scene.clone();
     apply(&mut moved, &sets)?;
@@ -306,7 +323,10 @@ pub fn table(summary: &SweepSummary) -> String {
     }
     let failed: Vec<&TrialResult> = summary.trials.iter().filter(|t| !t.success).collect();
     if !failed.is_empty() {
-        let _ = writeln!(out, "failed draws (height cm, tilt °, shift cm, friction, noise ×, start raised cm):");
+        let _ = writeln!(
+            out,
+            "failed draws (height cm, tilt °, shift cm, friction, noise ×, start raised cm):"
+        );
         for t in failed {
             let Some(d) = &t.draw else { continue };
             let _ = writeln!(
@@ -462,7 +482,9 @@ mod tests {
 
     #[test]
     fn partitions_split_the_draws_without_overlap_or_gap() {
-        let shares: Vec<Partition> = (1..=3).map(|k| parse_partition(&format!("{k}/3")).expect("valid")).collect();
+        let shares: Vec<Partition> = (1..=3)
+            .map(|k| parse_partition(&format!("{k}/3")).expect("valid"))
+            .collect();
         for index in 0..100 {
             assert_eq!(shares.iter().filter(|p| p.runs(index)).count(), 1);
         }

@@ -47,7 +47,57 @@ pub(super) struct Machine<'b, 'a> {
     /// Time the current state's motion has run on its own clock \[s\] (slower than the run's
     /// during a guarded approach): per-sample frames follow the motion, not the wall clock.
     motion_clock_s: f64,
+    /// Lift-off of the current state from the contact it was entered in, if any.
+    lift: Option<LiftOff>,
+    /// When the current state's force control began and the force the tool applied then (base
+    /// frame): the desired force ramps from it.
+    ramp_from: Option<(f64, Vector3<f64>)>,
+    /// The desired force of the last command before its ramp (base frame).
+    target_force: Vector3<f64>,
+    /// How fast the motion's clock runs against the run's (below 1 in a guarded approach): the
+    /// commanded velocity is the motion's times this.
+    clock_rate: f64,
 }
+
+/// A state that leaves a contact with a learned motion first lifts the tool off along the
+/// contact normal, with its motion paused, and afterwards never commands the tool back nearer
+/// the surface it left than the lift: a learned path that starts with the tail of the
+/// demonstrator's push (it does: segments split where the force peaks) would press into the
+/// surface again.
+#[derive(Debug, Clone, Copy)]
+struct LiftOff {
+    /// Unit direction away from the surface (against the force the tool applied), base frame.
+    away: Vector3<f64>,
+    /// The tool point where the state was entered, base frame.
+    from: Vector3<f64>,
+    /// How far to lift \[m\].
+    distance_m: f64,
+    /// Lift speed \[m/s\].
+    speed_mps: f64,
+    /// Lifted so far \[m\].
+    done_m: f64,
+}
+
+impl LiftOff {
+    fn lifting(&self) -> bool {
+        self.done_m < self.distance_m
+    }
+}
+
+/// How far a state that leaves a contact lifts off first \[m\]: clear of the surface's
+/// compliance and of sensor noise, short enough to cost a fraction of a second.
+pub(super) const LIFT_OFF_M: f64 = 0.01;
+
+/// Lift-off speed \[m/s\]: the contact-safe speed.
+const LIFT_OFF_SPEED_MPS: f64 = GUARD_SPEED_MPS;
+
+/// The applied force above which a state is entered in contact \[N\] (several times the wrist
+/// sensor's noise).
+const IN_CONTACT_N: f64 = 1.0;
+
+/// How long the desired force takes to ramp from the force applied when force control begins
+/// to the state's own \[s\]: a step in the desired force is a step in the commanded torques.
+pub(super) const FORCE_RAMP_S: f64 = 0.15;
 
 /// How a state that expects contact approaches it: within `zone_m` of its motion's goal (flange
 /// positions) the motion's time runs slower, so that the tool moves at most `speed_mps`.
@@ -116,12 +166,17 @@ pub(super) struct Sensed {
 }
 
 impl Sensed {
-    /// What the rig's controller measured, judged against the last command (if any).
-    pub(super) fn of(rig: &Rig<'_>, last_cmd: Option<&Command>) -> Self {
+    /// What the rig's controller measured, judged against the last command (if any) with the
+    /// state's own desired force (`force_reached` waits for it, not for a force on its ramp).
+    pub(super) fn of(rig: &Rig<'_>, last_cmd: Option<&Command>, target_force: Vector3<f64>) -> Self {
         let applied = rig.controller.state().applied;
         Sensed {
             applied,
-            force_error_max: last_cmd.and_then(|cmd| force_error(cmd, &applied)),
+            force_error_max: last_cmd.and_then(|cmd| {
+                let mut target = cmd.clone();
+                target.wrench.fixed_rows_mut::<3>(0).copy_from(&target_force);
+                force_error(&target, &applied)
+            }),
         }
     }
 }
@@ -146,6 +201,10 @@ impl<'b, 'a> Machine<'b, 'a> {
             velocity: [0.0; 3],
             guarded: None,
             motion_clock_s: 0.0,
+            lift: None,
+            ramp_from: None,
+            target_force: Vector3::zeros(),
+            clock_rate: 1.0,
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -170,6 +229,9 @@ impl<'b, 'a> Machine<'b, 'a> {
 
     /// Enters a state at run time `t`: restart its motion from the flange pose, run entry actions.
     pub(super) fn enter(&mut self, state: ir::StateId, t: f64, rig: &mut Rig<'_>) -> Result<(), ExecError> {
+        let was_forcing = self
+            .active()
+            .is_some_and(|active| active.position_controlled.contains(&false));
         self.state = state;
         self.entered_s = t;
         self.extension = None;
@@ -177,10 +239,28 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.force_profile = None;
         self.guarded = None;
         self.motion_clock_s = 0.0;
+        self.lift = None;
+        self.ramp_from = None;
+        self.clock_rate = 1.0;
         let flange = rig.flange();
         self.held = flange;
         let Some(active) = self.active() else { return Ok(()) };
         self.guarded = guarded_approach(self.skill(), active);
+        let applied = rig.controller.state().applied.fixed_rows::<3>(0).into_owned();
+        let forcing = active.position_controlled.contains(&false);
+        if forcing && !was_forcing {
+            self.ramp_from = Some((t, applied));
+        }
+        // Leaving a contact on a learned path under pure position control: lift off first.
+        if active.motion.is_some() && !forcing && self.guarded.is_none() && applied.norm() > IN_CONTACT_N {
+            self.lift = Some(LiftOff {
+                away: -applied.normalize(),
+                from: rig.tool().translation.vector,
+                distance_m: LIFT_OFF_M,
+                speed_mps: LIFT_OFF_SPEED_MPS * self.overrides.speed_factor.min(1.0),
+                done_m: 0.0,
+            });
+        }
         let speed = self.overrides.speed_factor;
         if let Some(motion_id) = active.motion {
             let learned = self.bound.motions[motion_id.index()];
@@ -390,6 +470,13 @@ impl<'b, 'a> Machine<'b, 'a> {
                 self.check_goal(result)?;
             }
         }
+        if let Some(lift) = &mut self.lift {
+            if lift.lifting() {
+                lift.done_m = (lift.done_m + lift.speed_mps * dt).min(lift.distance_m);
+                // The motion waits until the tool is off the surface.
+                return Ok(());
+            }
+        }
         if let Some(motion) = &mut self.motion {
             let learned = self.bound.motions[motion.id];
             // Guarded approach: near the goal, run the motion's clock slower (a DMP's time
@@ -407,6 +494,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             }
             motion.rollout.step(learned, step);
             self.motion_clock_s += step;
+            self.clock_rate = step / dt;
         }
         let profile_dmp =
             self.active()
@@ -421,15 +509,27 @@ impl<'b, 'a> Machine<'b, 'a> {
         Ok(())
     }
 
+    /// The desired force of the last command before its ramp (base frame).
+    pub(super) fn target_force(&self) -> Vector3<f64> {
+        self.target_force
+    }
+
     /// The command of the current (active) state.
     pub(super) fn command(&mut self, active: &ir::ActiveState, rig: &Rig<'_>, t: f64) -> Command {
         let (flange, flange_v, omega) = match &self.motion {
             Some(motion) => {
                 motion.rollout.position.velocity_into(&mut self.velocity);
+                // A slowed clock slows the path's velocity too (the feed-forward the
+                // controller tracks), not only the path.
+                let rate = if self.lift.is_some_and(|lift| lift.lifting()) {
+                    0.0
+                } else {
+                    self.clock_rate
+                };
                 (
                     motion.rollout.flange(),
-                    Vector3::from(self.velocity),
-                    motion.rollout.orientation.angular_velocity(),
+                    Vector3::from(self.velocity) * rate,
+                    motion.rollout.orientation.angular_velocity() * rate,
                 )
             }
             None => {
@@ -440,7 +540,18 @@ impl<'b, 'a> Machine<'b, 'a> {
                 (held, Vector3::zeros(), Vector3::zeros())
             }
         };
-        let (pose, twist) = rig.tool_command(&flange, &flange_v, &omega);
+        let (mut pose, mut twist) = rig.tool_command(&flange, &flange_v, &omega);
+        if let Some(lift) = &self.lift {
+            let p = pose.translation.vector;
+            let above = (p - lift.from).dot(&lift.away);
+            if above < lift.done_m {
+                pose.translation.vector += lift.away * (lift.done_m - above);
+            }
+            if lift.lifting() {
+                let v = lift.away * lift.speed_mps;
+                twist = Vector6::new(v.x, v.y, v.z, 0.0, 0.0, 0.0);
+            }
+        }
         let frame = self.frame_pose(active.frame, rig, t);
         let scale = self.overrides.force_scale;
         let z = frame.rotation * Vector3::z();
@@ -457,6 +568,12 @@ impl<'b, 'a> Machine<'b, 'a> {
                 z * self.force_profile.as_ref().map_or(0.0, |r| r.position()[0]) * scale
             }
             Some(other) => z * other.value_n().unwrap_or(0.0) * scale,
+        };
+        self.target_force = force;
+        // At the switch to force control the desired force ramps from what the tool applied.
+        let force = match self.ramp_from {
+            Some((t0, from)) if t - t0 < FORCE_RAMP_S => from + (force - from) * ((t - t0) / FORCE_RAMP_S).max(0.0),
+            _ => force,
         };
         Command {
             pose,

@@ -302,7 +302,7 @@ fn skill_loop(
             });
         }
         let active = machine.active().expect("terminal states returned above");
-        let sensed = Sensed::of(rig, last_cmd.as_ref());
+        let sensed = Sensed::of(rig, last_cmd.as_ref(), machine.target_force());
         if let Some((target, transition)) = machine.choose(active, &sensed, rig, t) {
             let last = visits.last_mut().expect("a visit per state");
             last.exit_s = t - start_s;

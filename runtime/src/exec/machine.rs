@@ -54,6 +54,8 @@ pub(super) struct Machine<'b, 'a> {
     ramp_from: Option<(f64, Vector3<f64>)>,
     /// The desired force of the last command before its ramp (base frame).
     target_force: Vector3<f64>,
+    /// The compliant z of the last command (base frame).
+    last_frame_z: Vector3<f64>,
     /// How fast the motion's clock runs against the run's (below 1 in a guarded approach): the
     /// commanded velocity is the motion's times this.
     clock_rate: f64,
@@ -204,6 +206,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             lift: None,
             ramp_from: None,
             target_force: Vector3::zeros(),
+            last_frame_z: Vector3::z(),
             clock_rate: 1.0,
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
@@ -251,10 +254,21 @@ impl<'b, 'a> Machine<'b, 'a> {
         if forcing && !was_forcing {
             self.ramp_from = Some((t, applied));
         }
-        // Leaving a contact on a learned path under pure position control: lift off first.
-        if active.motion.is_some() && !forcing && self.guarded.is_none() && applied.norm() > IN_CONTACT_N {
+        // Leaving a contact on a learned path under pure position control: lift off first, away
+        // from the force the tool applied or, when a force profile has let it drop to nothing
+        // (a press that releases), against the compliant z it was controlled along.
+        let in_contact = applied.norm() > IN_CONTACT_N || was_forcing;
+        if active.motion.is_some() && !forcing && self.guarded.is_none() && in_contact {
+            let away = if applied.norm() > IN_CONTACT_N {
+                -applied.normalize()
+            } else if self.target_force.norm() > 1e-3 {
+                // The force it was asked to push with points into the surface.
+                -self.target_force.normalize()
+            } else {
+                -self.last_frame_z
+            };
             self.lift = Some(LiftOff {
-                away: -applied.normalize(),
+                away,
                 from: rig.tool().translation.vector,
                 distance_m: LIFT_OFF_M,
                 speed_mps: LIFT_OFF_SPEED_MPS * self.overrides.speed_factor.min(1.0),
@@ -555,6 +569,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         let frame = self.frame_pose(active.frame, rig, t);
         let scale = self.overrides.force_scale;
         let z = frame.rotation * Vector3::z();
+        self.last_frame_z = z;
         let force = match active.force.map(|id| self.bound.forces[id.index()]) {
             None => Vector3::zeros(),
             Some(LearnedForce::Dmp { .. }) => {

@@ -323,8 +323,16 @@ impl RapierPlant {
                 let Some(object) = self.colliders.get(*handle) else {
                     continue;
                 };
+                // The same for objects on bodies of their own (a button's cap).
+                let object_pose = match (
+                    object.parent().and_then(|h| self.bodies.get(h)),
+                    object.position_wrt_parent(),
+                ) {
+                    (Some(body), Some(relative)) => *body.position() * *relative,
+                    _ => *object.position(),
+                };
                 let contact =
-                    rapier3d::parry::query::contact(&tool_pose, tool.shape(), object.position(), object.shape(), 1.0);
+                    rapier3d::parry::query::contact(&tool_pose, tool.shape(), &object_pose, object.shape(), 1.0);
                 let distance = match contact {
                     Ok(Some(contact)) => f64::from(contact.dist),
                     _ => 1.0,

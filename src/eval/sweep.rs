@@ -215,6 +215,9 @@ pub fn draw(ranges: &SweepRanges, seed: u64, skill: &str, index: usize) -> Draw 
 /// 1 mm above the surface).
 pub const START_CLEARANCE_M: f64 = 0.001;
 
+/// The highest a sweep raises the tool's start \[m\].
+const MAX_LIFT_M: f64 = 0.5;
+
 /// The `--set` overrides that make `draw` of `scene` (objects moved and tilted, friction, sensor
 /// noise and seed), and a start raised by inverse kinematics when the moved objects would hold
 /// the tool inside them. `draw.start_raised_m` is filled in.
@@ -254,17 +257,20 @@ pub fn scene_sets(scene: &Scene, robot: &Robot, draw: &mut Draw, seed: u64) -> R
 
     let mut moved = scene.clone();
     apply(&mut moved, &sets)?;
-    // Raise the start until the tool is outside every object: a tilted surface gains less
-    // clearance than the lift, so measure again after each lift.
+    // Raise the start until the tool is outside every object: find how far the tool must go up,
+    // put it there by inverse kinematics, and check with the arm where it then is (a little
+    // more each time the orientation's residual left it short).
     let mut lift = 0.0;
-    for _ in 0..4 {
-        let clearance = RapierPlant::scene_start_clearance(robot.clone(), &moved)
+    for margin in [0.0, 0.002, 0.005] {
+        let needed = RapierPlant::scene_lift_to_clear(robot.clone(), &moved, START_CLEARANCE_M + margin, MAX_LIFT_M)
             .map_err(|err| crate::load::error_chain(&err))?
-            .map_or(f64::INFINITY, |(distance, _)| distance);
-        if clearance >= START_CLEARANCE_M {
+            .ok_or_else(|| {
+                format!("no start up to {MAX_LIFT_M} m above the tool's start is clear of the moved objects")
+            })?;
+        if needed <= 0.0 {
             break;
         }
-        lift += (2.0 * START_CLEARANCE_M - clearance) / draw.tilt_deg.to_radians().cos().max(0.5);
+        lift += needed;
         let target = Translation3::new(0.0, 0.0, lift) * start;
         let q = robot.inverse_kinematics(&target, &q0).map_err(|err| err.to_string())?;
         let text = q.iter().map(|v| format!("{v:.9}")).collect::<Vec<_>>().join(", ");
@@ -506,5 +512,62 @@ mod tests {
             ..SweepRanges::default()
         };
         assert!(ranges.validate("press").unwrap_err().contains("sweep.height_m"));
+    }
+}
+
+#[cfg(test)]
+mod scene_tests {
+    use std::path::Path;
+
+    use skill_runtime::robot::Robot;
+    use skill_runtime::sim::{RapierPlant, Scene};
+
+    use super::*;
+
+    /// Every shipped scene, its objects moved up into the tool's start: the draw raises the
+    /// start until the tool is outside them, and the scene then builds.
+    #[test]
+    fn raised_objects_raise_the_start_out_of_them() {
+        for file in [
+            "examples/scenes/table.toml",
+            "examples/scenes/button.toml",
+            "examples/scenes/cylinder.toml",
+        ] {
+            let scene = Scene::from_file(Path::new(file)).expect("shipped scene");
+            let robot = Robot::from_urdf_file(&scene.urdf_path(), scene.spec().robot.tool.as_deref()).expect("urdf");
+            for (height_m, tilt_deg) in [(0.066, 3.3), (0.10, -10.0), (0.0, 10.0), (-0.1, 0.0)] {
+                let mut draw = Draw {
+                    index: 0,
+                    height_m,
+                    tilt_deg,
+                    tilt_axis_deg: 30.0,
+                    shift_m: [0.01, -0.02],
+                    friction: 0.5,
+                    noise_scale: 2.0,
+                    start_raised_m: 0.0,
+                };
+                let sets = scene_sets(&scene, &robot, &mut draw, 1).expect("a start above the objects");
+                let mut moved = scene.clone();
+                apply(&mut moved, &sets).expect("valid overrides");
+                let clearance = RapierPlant::scene_start_clearance(robot.clone(), &moved)
+                    .expect("builds")
+                    .map_or(1.0, |(d, _)| d);
+                assert!(
+                    clearance >= START_CLEARANCE_M,
+                    "{file} {height_m} m {tilt_deg}°: clearance {clearance} m after raising {} m",
+                    draw.start_raised_m
+                );
+                if height_m > 0.05 {
+                    assert!(
+                        draw.start_raised_m > height_m - 0.02,
+                        "{file}: raised {} m",
+                        draw.start_raised_m
+                    );
+                } else if height_m < 0.0 {
+                    assert_eq!(draw.start_raised_m, 0.0);
+                }
+                RapierPlant::from_scene(&moved).expect("the tool starts outside every object");
+            }
+        }
     }
 }

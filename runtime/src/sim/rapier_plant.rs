@@ -305,6 +305,15 @@ impl RapierPlant {
     /// (negative: how deep the tool starts inside), and that object's name; `None` when the
     /// scene has no objects or the tool no collider. Distances beyond 1 m read as 1 m.
     pub fn start_clearance(&self) -> Option<(f64, String)> {
+        self.clearance_lifted(0.0)
+    }
+
+    /// [`RapierPlant::start_clearance`] with the tool moved `lift_m` up along the base z.
+    fn clearance_lifted(&self, lift_m: f64) -> Option<(f64, String)> {
+        let lift = rapier3d::math::Pose::from_parts(
+            Vector::new(0.0, 0.0, lift_m as Real),
+            rapier3d::math::Rotation::IDENTITY,
+        );
         let mut closest: Option<(f64, String)> = None;
         for tool in &self.tool_colliders {
             let Some(tool) = self.colliders.get(*tool) else {
@@ -316,8 +325,8 @@ impl RapierPlant {
                 tool.parent().and_then(|h| self.bodies.get(h)),
                 tool.position_wrt_parent(),
             ) {
-                (Some(body), Some(relative)) => *body.position() * *relative,
-                _ => *tool.position(),
+                (Some(body), Some(relative)) => lift * *body.position() * *relative,
+                _ => lift * *tool.position(),
             };
             for (handle, name) in &self.object_colliders {
                 let Some(object) = self.colliders.get(*handle) else {
@@ -350,6 +359,46 @@ impl RapierPlant {
     pub fn scene_start_clearance(robot: Robot, scene: &Scene) -> Result<Option<(f64, String)>, SimError> {
         let plant = Self::build(robot, scene, RapierOptions::default())?;
         Ok(plant.start_clearance())
+    }
+
+    /// How far the tool must move up along the base z from its start for every object to be at
+    /// least `clearance_m` away (0 when it already is), to within 0.5 mm above; `None` when no
+    /// lift up to `max_lift_m` clears it. The tool moves alone (the arm is not moved): the
+    /// caller finds joint positions for the lifted pose and checks again.
+    pub fn scene_lift_to_clear(
+        robot: Robot,
+        scene: &Scene,
+        clearance_m: f64,
+        max_lift_m: f64,
+    ) -> Result<Option<f64>, SimError> {
+        let plant = Self::build(robot, scene, RapierOptions::default())?;
+        let clear = |lift: f64| plant.clearance_lifted(lift).is_none_or(|(d, _)| d >= clearance_m);
+        if clear(0.0) {
+            return Ok(Some(0.0));
+        }
+        // Scan up in 1 cm steps (objects can be thinner than a penetration depth says), then
+        // bisect between the last blocked and the first clear height.
+        let mut blocked = 0.0;
+        let mut free = None;
+        let mut lift = 0.01;
+        while lift <= max_lift_m + 1e-12 {
+            if clear(lift) {
+                free = Some(lift);
+                break;
+            }
+            blocked = lift;
+            lift += 0.01;
+        }
+        let Some(mut free) = free else { return Ok(None) };
+        while free - blocked > 5e-4 {
+            let mid = 0.5 * (free + blocked);
+            if clear(mid) {
+                free = mid;
+            } else {
+                blocked = mid;
+            }
+        }
+        Ok(Some(free))
     }
 
     /// The robot model the plant simulates.

@@ -547,3 +547,105 @@ fn learn_reads_other_separators_and_column_names() {
     assert!(learned.exists());
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+/// The trials of a summary.json, each without its wall-time-free fields compared as JSON.
+fn sweep_trials(path: &Path) -> Vec<serde_json::Value> {
+    let text = std::fs::read_to_string(path).expect("summary written");
+    let summary: serde_json::Value = serde_json::from_str(&text).expect("json");
+    assert_eq!(summary["kind"], "sweep");
+    let mut trials = summary["trials"].as_array().expect("trials").clone();
+    trials.sort_by_key(|t| t["draw"]["index"].as_u64());
+    trials
+}
+
+#[test]
+fn a_sweep_split_into_shares_and_merged_equals_the_whole_sweep() {
+    let dir = temp_dir("sweep");
+    let run = |out: &str, extra: &[&str]| {
+        let out_dir = dir.join(out);
+        let mut args = vec![
+            "eval",
+            "--skill",
+            "touch",
+            "--sweep",
+            "3",
+            "--seed",
+            "5",
+            "--min-success",
+            "0",
+            "--out",
+            out_dir.to_str().expect("utf-8"),
+        ];
+        args.extend_from_slice(extra);
+        let result = skillc(&args);
+        assert_eq!(
+            result.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        out_dir.join("summary.json")
+    };
+    let whole = run("whole", &[]);
+    let first = run("first", &["--partition", "1/2"]);
+    let second = run("second", &["--partition", "2/2"]);
+    assert_eq!(sweep_trials(&first).len(), 2);
+    assert_eq!(sweep_trials(&second).len(), 1);
+    let merged_dir = dir.join("merged");
+    let merged = skillc(&[
+        "eval",
+        "merge",
+        "--min-success",
+        "0",
+        "--out",
+        merged_dir.to_str().expect("utf-8"),
+        first.to_str().expect("utf-8"),
+        second.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(
+        merged.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&merged.stderr)
+    );
+    assert_eq!(sweep_trials(&merged_dir.join("summary.json")), sweep_trials(&whole));
+    // Each trial carries its draw and the overrides that repeat it.
+    for trial in sweep_trials(&whole) {
+        assert!(trial["draw"]["height_m"].as_f64().expect("height").abs() <= 0.10);
+        assert!(trial["set"].as_array().is_some_and(|s| !s.is_empty()));
+    }
+    assert!(merged_dir.join("plots/sweep.svg").exists());
+
+    // Overlapping shares and a file that is not a sweep summary are refused.
+    let overlap = skillc(&[
+        "eval",
+        "merge",
+        "--out",
+        merged_dir.to_str().expect("utf-8"),
+        first.to_str().expect("utf-8"),
+        first.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(
+        overlap.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&overlap.stderr)
+    );
+    assert!(String::from_utf8_lossy(&overlap.stderr).contains("overlap"));
+    let not_sweep = skillc(&[
+        "eval",
+        "merge",
+        "--out",
+        merged_dir.to_str().expect("utf-8"),
+        "examples/eval/default.toml",
+    ]);
+    assert_ne!(not_sweep.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&not_sweep.stderr).contains("not a sweep summary"));
+    // A bad partition or draw count is a usage error.
+    for bad in [["--sweep", "0"], ["--partition", "3/2"]] {
+        let mut args = vec!["eval", "--skill", "touch", "--sweep", "2"];
+        args.extend_from_slice(&bad);
+        assert_eq!(skillc(&args).status.code(), Some(2), "{bad:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -187,6 +187,13 @@ pub enum StmtKind {
         /// The largest speed there.
         speed: Expr,
     },
+    /// `lift off 2 cm at 10 mm/s`, or `lift off 0 mm`.
+    LiftOff {
+        /// How far to lift along the contact normal.
+        distance: Expr,
+        /// How fast, if written (`at V`).
+        speed: Option<Expr>,
+    },
     /// `on GUARD -> TARGET`.
     Transition {
         /// The guard.
@@ -288,6 +295,13 @@ pub enum GuardKind {
     And(Vec<Guard>),
     /// `not a`.
     Not(Box<Guard>),
+    /// `a for 100 ms`: `a` has held that long without a break.
+    Held {
+        /// The guard that must keep holding.
+        guard: Box<Guard>,
+        /// How long.
+        duration: Expr,
+    },
     /// `force(FRAME.AXIS) OP VALUE`.
     Force {
         /// The measured axis.

@@ -132,6 +132,12 @@ codes! {
     NonPositiveLimit => "skill::check::non_positive_limit", Error;
     /// `approach within 5 cm at 10 mm/s` in a state without `move`: there is no motion to slow.
     ApproachWithoutMove => "skill::check::approach_without_move", Error;
+    /// `lift off 2 cm at 10 mm/s` in a state without `move`: only a state that leaves a contact
+    /// on a learned path lifts off.
+    LiftOffWithoutMove => "skill::check::lift_off_without_move", Error;
+    /// `for` on a guard that only counts time since entry: `on dwell 100 ms for 50 ms -> next`
+    /// (that is `dwell 150 ms`).
+    ForOnTimedGuard => "skill::check::for_on_timed_guard", Error;
     /// A force-controlled axis whose PI integral has no limit: it can wind up.
     NoIntegralLimit => "skill::lint::no_integral_limit", Warning;
     /// A state that only waits for contact, with no timeout, motion or dwell to leave it.
@@ -143,6 +149,9 @@ codes! {
     /// `approach within 5 cm at 10 mm/s` in a state no force guard leaves: it slows down for
     /// a contact nothing waits for.
     ApproachWithoutForceGuard => "skill::lint::approach_without_force_guard", Warning;
+    /// `lift off 2 cm at 10 mm/s` in a state that never lifts off: one that force-controls an
+    /// axis, or approaches a contact (`approach`, or a force guard).
+    LiftOffIgnored => "skill::lint::lift_off_ignored", Warning;
 }
 
 impl fmt::Display for Code {

@@ -317,6 +317,10 @@ fn statement(stmt: &StmtKind) -> String {
             format!("entry {}", actions.join(", "))
         }
         StmtKind::Approach { within, speed } => format!("approach within {} at {}", expr(within), expr(speed)),
+        StmtKind::LiftOff { distance, speed } => match speed {
+            Some(speed) => format!("lift off {} at {}", expr(distance), expr(speed)),
+            None => format!("lift off {}", expr(distance)),
+        },
         StmtKind::Transition { guard: g, target } => {
             let target = match target {
                 Target::State(name) => name.name.clone(),
@@ -343,7 +347,8 @@ fn axis_set(axes: &AxisSet) -> String {
     }
 }
 
-/// Prints a guard with the fewest parentheses that keep its meaning (`not` > `and` > `or`).
+/// Prints a guard with the fewest parentheses that keep its meaning (`not` > `for` > `and` >
+/// `or`; one `for` a condition).
 pub fn guard(g: &Guard) -> String {
     match &g.kind {
         GuardKind::Or(parts) => parts.iter().map(guard).collect::<Vec<_>>().join(" or "),
@@ -355,8 +360,14 @@ pub fn guard(g: &Guard) -> String {
             })
             .collect::<Vec<_>>()
             .join(" and "),
+        GuardKind::Held { guard: inner, duration } => match inner.kind {
+            GuardKind::Or(_) | GuardKind::And(_) | GuardKind::Held { .. } => {
+                format!("({}) for {}", guard(inner), expr(duration))
+            }
+            _ => format!("{} for {}", guard(inner), expr(duration)),
+        },
         GuardKind::Not(inner) => match inner.kind {
-            GuardKind::Or(_) | GuardKind::And(_) => format!("not ({})", guard(inner)),
+            GuardKind::Or(_) | GuardKind::And(_) | GuardKind::Held { .. } => format!("not ({})", guard(inner)),
             _ => format!("not {}", guard(inner)),
         },
         GuardKind::Force { axis, op, rhs } => {

@@ -165,6 +165,10 @@ fn join_or(items: &[&str]) -> String {
     }
 }
 
+/// The statements of a state, for "expected ..." messages.
+const STATEMENTS: &str =
+    "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `lift off`, `on`)";
+
 /// What a rule means to a user, for "expected ..." messages.
 fn rule_label(rule: Rule) -> Option<&'static str> {
     Some(match rule {
@@ -186,17 +190,20 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         Rule::state => "`state`",
         Rule::terminal => "`terminal`",
         Rule::state_entry | Rule::move_stmt | Rule::control_stmt | Rule::stiffness_stmt | Rule::apply_stmt => {
-            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `on`)"
+            STATEMENTS
         }
-        Rule::gains_stmt | Rule::entry_stmt | Rule::approach_stmt | Rule::approach_kw | Rule::transition => {
-            "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `on`)"
-        }
+        Rule::gains_stmt | Rule::entry_stmt | Rule::approach_stmt | Rule::approach_kw | Rule::transition => STATEMENTS,
+        Rule::lift_off_stmt | Rule::lift_kw => STATEMENTS,
+        Rule::off_kw => "`off`",
         Rule::from_current => "`from current`",
         Rule::control_group | Rule::control_mode => "`position` or `force`",
         Rule::axis_set | Rule::all_axes => "axes (`x y z rx ry rz` or `all`)",
         Rule::axis_value => "axes followed by `:`",
         Rule::extend => "`extend`",
-        Rule::guard | Rule::guard_and | Rule::guard_not | Rule::not_kw | Rule::named_guard => "a guard",
+        Rule::guard | Rule::guard_and | Rule::guard_held | Rule::guard_not | Rule::not_kw | Rule::named_guard => {
+            "a guard"
+        }
+        Rule::for_kw => "`for`",
         Rule::force_cmp | Rule::timed | Rule::timed_kw | Rule::reached => "a guard",
         Rule::cmp_op => "a comparison (`>=`, `>`, `<=`, `<`)",
         Rule::task_entry | Rule::step | Rule::fallback => "`step` or `fallback`",
@@ -454,6 +461,13 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
             let speed = expr(inner.next().expect("grammar: approach has a speed"));
             StmtKind::Approach { within, speed }
         }
+        Rule::lift_off_stmt => {
+            let _lift = inner.next().expect("grammar: lift keyword");
+            let _off = inner.next().expect("grammar: off keyword");
+            let distance = expr(inner.next().expect("grammar: lift off has a distance"));
+            let speed = inner.next().map(expr);
+            StmtKind::LiftOff { distance, speed }
+        }
         Rule::transition => {
             let guard_pair = inner.next().expect("grammar: transition has a guard");
             let target_pair = inner.next().expect("grammar: transition has a target");
@@ -544,6 +558,21 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
                     GuardKind::Or(parts)
                 } else {
                     GuardKind::And(parts)
+                },
+                span,
+            }
+        }
+        Rule::guard_held => {
+            let mut inner = pair.into_inner();
+            let held = guard(inner.next().expect("grammar: guard_held has a guard"));
+            if inner.next().is_none() {
+                return held;
+            }
+            let duration = expr(inner.next().expect("grammar: `for` has a duration"));
+            Guard {
+                kind: GuardKind::Held {
+                    guard: Box::new(held),
+                    duration,
                 },
                 span,
             }

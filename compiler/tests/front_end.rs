@@ -393,3 +393,214 @@ task k {
     let compiled = skill_compiler::compile_str("f.skill", &formatted);
     assert!(compiled.diags.is_empty(), "{:?}", compiled.diags);
 }
+
+#[test]
+fn formatting_prints_lift_offs_and_held_guards_with_the_fewest_parentheses() {
+    let text = "skill s { learn { segments = max_force frame c = force_aligned(at: end(segment 1)) motion p = dmp(segment 1) motion q = dmp(segment 2) threshold t = 2 N }\nstate a { move p on force(c.z)>=t for 20 ms -> b on ( motion_done and force(c.z) < t ) for 50 ms or timeout 5 s -> d }\nstate b { move q lift off 2 cm at 10 mm/s on (not (motion_done for 10 ms)) for 100 ms -> e on timeout 5 s -> d }\nstate e { move q\n lift  off 0 mm on not force(c.z) >= t for 1 s -> d on timeout 5 s -> d }\n terminal d: success }\n";
+    let source = skill_compiler::SourceFile::new("f.skill", text);
+    let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
+    assert!(diags.is_empty(), "{diags:?}");
+    let formatted = skill_compiler::fmt::format(&source, &ast);
+    let expected = r#"skill s {
+    learn {
+        segments = max_force
+        frame c = force_aligned(at: end(segment 1))
+        motion p = dmp(segment 1)
+        motion q = dmp(segment 2)
+        threshold t = 2 N
+    }
+
+    state a {
+        move p from current
+        on force(c.z) >= t for 20 ms -> b
+        on (motion_done and force(c.z) < t) for 50 ms or timeout 5 s -> d
+    }
+
+    state b {
+        move q from current
+        lift off 2 cm at 10 mm/s
+        on not (motion_done for 10 ms) for 100 ms -> e
+        on timeout 5 s -> d
+    }
+
+    state e {
+        move q from current
+        lift off 0 mm
+        on not force(c.z) >= t for 1 s -> d
+        on timeout 5 s -> d
+    }
+
+    terminal d: success
+}
+"#;
+    assert_eq!(formatted, expected);
+    let compiled = skill_compiler::compile_str("f.skill", &formatted);
+    assert!(compiled.diags.is_empty(), "{:?}", compiled.diags);
+    let skill = &compiled.program.expect("compiles").skills[0];
+    // `for` binds tighter than `or` and looser than `not`.
+    let guard = |index: usize| &skill.transitions[index].guard;
+    assert!(matches!(guard(1), skill_ir::Guard::Or { any } if matches!(any[0], skill_ir::Guard::Held { .. })));
+    let skill_ir::Guard::Held {
+        guard: inner,
+        duration_s,
+    } = guard(4)
+    else {
+        panic!("`not A for D` is held: {:?}", guard(4))
+    };
+    assert_eq!(*duration_s, 1.0);
+    assert!(matches!(**inner, skill_ir::Guard::Not { .. }));
+    let skill_ir::StateKind::Active(e) = &skill.states[2].kind else {
+        panic!("an active state")
+    };
+    assert_eq!(
+        e.lift_off,
+        Some(skill_ir::LiftOffSpec {
+            distance_m: 0.0,
+            speed_mps: 0.0
+        })
+    );
+}
+
+/// The codes a template reports.
+fn codes_of(text: &str) -> Vec<Code> {
+    skill_compiler::compile_str("f.skill", text)
+        .diags
+        .iter()
+        .map(|diag| diag.code)
+        .collect()
+}
+
+/// A skill whose second state is `body`, with a motion `q`, a frame `c`, a force `f` and a
+/// threshold `t`.
+fn with_state(body: &str) -> String {
+    format!(
+        "skill s {{ learn {{ segments = max_force frame c = force_aligned(at: end(segment 1)) motion p = dmp(segment 1) motion q = dmp(segment 2) force f = force_at(end(segment 1), along: c.z) threshold t = 2 N }}\n\
+         state a {{ move p on force(c.z) >= t -> b on force(c.z) >= f -> b on timeout 9 s -> d }}\n\
+         state b {{ {body} }}\n terminal d: success }}\n"
+    )
+}
+
+#[test]
+fn lift_off_values_are_checked_by_dimension_and_sign() {
+    let ok = with_state("control force z, position x y rx ry rz in c apply f on timeout 1 s -> e } state e { move q lift off 5 mm at 1 cm/s on motion_done -> d");
+    assert_eq!(codes_of(&ok), Vec::<Code>::new());
+    let lift = |stmt: &str| {
+        with_state(&format!(
+            "control force z, position x y rx ry rz in c apply f on timeout 1 s -> e }} state e {{ move q {stmt} on motion_done -> d"
+        ))
+    };
+    assert_eq!(codes_of(&lift("lift off -1 cm at 10 mm/s")), [Code::OutOfRange]);
+    assert_eq!(codes_of(&lift("lift off 2 cm at 0 mm/s")), [Code::OutOfRange]);
+    assert_eq!(codes_of(&lift("lift off 2 cm")), [Code::BadArgument]);
+    assert_eq!(codes_of(&lift("lift off 2 s at 10 mm/s")), [Code::UnitMismatch]);
+    assert_eq!(codes_of(&lift("lift off 2 cm at 10 mm")), [Code::UnitMismatch]);
+    assert_eq!(
+        codes_of(&lift("lift off 2 cm at 10 mm/s lift off 0 mm")),
+        [Code::DuplicateStatement]
+    );
+    // No lift, no lint: `lift off 0 mm` in a state that would not lift anyway.
+    assert_eq!(
+        codes_of(&with_state(
+            "move q lift off 0 mm on force(c.z) >= t -> d on timeout 1 s -> d"
+        )),
+        Vec::<Code>::new()
+    );
+    // A force-controlled state never lifts off.
+    assert_eq!(
+        codes_of(&with_state(
+            "move q control force z, position x y rx ry rz in c apply f lift off 1 cm at 5 mm/s on motion_done -> d"
+        )),
+        [Code::LiftOffIgnored]
+    );
+}
+
+#[test]
+fn hold_times_are_positive_durations_and_not_on_timed_guards() {
+    let on = |guard: &str| with_state(&format!("move q on {guard} -> d on timeout 9 s -> d"));
+    assert_eq!(codes_of(&on("force(c.z) < t for 100 ms")), Vec::<Code>::new());
+    assert_eq!(codes_of(&on("force(c.z) < t for 0 ms")), [Code::OutOfRange]);
+    assert_eq!(codes_of(&on("force(c.z) < t for 100")), [Code::MissingUnit]);
+    assert_eq!(codes_of(&on("force(c.z) < t for 100 mm")), [Code::UnitMismatch]);
+    assert_eq!(codes_of(&on("timeout 1 s for 500 ms")), [Code::ForOnTimedGuard]);
+    assert_eq!(
+        codes_of(&on("(dwell 1 s or timeout 2 s) for 500 ms")),
+        [Code::ForOnTimedGuard]
+    );
+    // `not dwell 1 s for 50 ms` holds from 50 ms to 1 s: a meaning of its own.
+    assert_eq!(codes_of(&on("not dwell 1 s for 50 ms")), Vec::<Code>::new());
+    let compiled = skill_compiler::compile_str("f.skill", &on("timeout 1 s for 500 ms"));
+    assert_eq!(compiled.diags[0].help.as_deref(), Some("write `timeout 1.5 s` instead"));
+}
+
+#[test]
+fn a_hold_never_fires_after_an_earlier_timeout_or_beside_a_transition_on_its_guard() {
+    let state = |transitions: &str| with_state(&format!("move q {transitions}"));
+    assert_eq!(
+        codes_of(&state("on timeout 1 s -> d on force(c.z) < t for 2 s -> d")),
+        [Code::NeverFires]
+    );
+    assert_eq!(
+        codes_of(&state(
+            "on force(c.z) < t -> d on force(c.z) < t for 100 ms -> d on timeout 1 s -> d"
+        )),
+        [Code::NeverFires]
+    );
+    // The other way round the plain guard fires as soon as it holds, before it held 100 ms...
+    assert_eq!(
+        codes_of(&state(
+            "on force(c.z) < t for 100 ms -> d on force(c.z) < t -> d on timeout 1 s -> d"
+        )),
+        [Code::NeverFires]
+    );
+    assert_eq!(
+        codes_of(&state(
+            "on (force(c.z) < t and motion_done) for 100 ms -> d on timeout 1 s -> d on force(c.z) < t -> d"
+        )),
+        [Code::NeverFires]
+    );
+    // ... unless it only starts a search, which keeps the state, or needs more than the held guard.
+    assert_eq!(
+        codes_of(&state(
+            "on force(c.z) < t for 100 ms -> d on force(c.z) < t -> extend along c.z at 1 cm/s, up to 1 cm, then d on timeout 1 s -> d"
+        )),
+        Vec::<Code>::new()
+    );
+    assert_eq!(
+        codes_of(&state(
+            "on force(c.z) < t for 100 ms -> d on force(c.z) < t and motion_done -> d on timeout 1 s -> d"
+        )),
+        Vec::<Code>::new()
+    );
+    assert_eq!(
+        codes_of(&state(
+            "on force(c.z) < t for 100 ms and not force(c.z) < t -> d on timeout 1 s -> d"
+        )),
+        [Code::NeverFires]
+    );
+    assert_eq!(
+        codes_of(&state("on motion_done -> d on force(c.z) >= t for 20 ms -> d")),
+        Vec::<Code>::new(),
+        "a held force guard still needs contact but has a way out"
+    );
+    assert_eq!(
+        codes_of(&state("on force(c.z) >= t for 20 ms -> d")),
+        [Code::ContactWaitWithoutTimeout]
+    );
+}
+
+#[test]
+fn graphs_print_hold_times_on_their_edges() {
+    let program = skill_compiler::compile_str(
+        "f.skill",
+        &with_state("move q on force(c.z) < t for 100 ms -> d on timeout 1 s -> d"),
+    )
+    .program
+    .expect("compiles");
+    for format in [
+        skill_compiler::graph::GraphFormat::Dot,
+        skill_compiler::graph::GraphFormat::Mermaid,
+    ] {
+        let drawn = skill_compiler::graph::render(&program, format);
+        assert!(drawn.contains("force(c.z) < t for 100 ms"), "{drawn}");
+    }
+}

@@ -22,7 +22,8 @@ use serde::{Deserialize, Serialize};
 ///
 /// - 1: the first format.
 /// - 2: skills and task steps may carry supervisor [`Limit`]s, active states an [`Approach`]
-///   (all optional: a version 1 file reads as a version 2 file without them).
+///   and a [`LiftOffSpec`], and guards may be [`Guard::Held`] (all optional: a version 1 file
+///   reads as a version 2 file without them).
 pub const IR_VERSION: u32 = 2;
 
 /// A compiled `.skill` file.
@@ -701,6 +702,25 @@ pub struct ActiveState {
     /// JSON when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub approach: Option<Approach>,
+    /// How the state lifts off the contact it is entered in, if it says so (`lift off 2 cm at
+    /// 10 mm/s`, or `lift off 0 mm` for no lift); without it the runtime's default lift applies.
+    /// Either way only a state entered in contact that runs a motion under pure position control
+    /// and approaches no contact lifts off. Left out of the JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lift_off: Option<LiftOffSpec>,
+}
+
+/// A declared lift-off (`lift off 2 cm at 10 mm/s`): on entering the state in contact the tool
+/// first moves `distance_m` along the contact normal, away from the surface, at `speed_mps`
+/// (the motion waits), and afterwards is never commanded nearer the surface than that. Not
+/// scaled by a task's speed factor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LiftOffSpec {
+    /// How far to lift \[m\], zero or positive; zero switches the lift off for the state.
+    pub distance_m: f64,
+    /// Lift speed \[m/s\]: positive when `distance_m` is; unused (and zero when not written,
+    /// `lift off 0 mm`) when `distance_m` is zero.
+    pub speed_mps: f64,
 }
 
 /// A declared guarded approach (`approach within 10 cm at 25 mm/s`): within `within_m` of the
@@ -827,6 +847,16 @@ pub enum Guard {
     /// Like `Dwell`, but reported as a timeout when it fires.
     Timeout {
         /// Duration \[s\].
+        duration_s: f64,
+    },
+    /// `guard` has held at every evaluation for at least `duration_s` without a break
+    /// (`force_reached within 0.5 N for 100 ms`). The time restarts whenever `guard` does not
+    /// hold and when the state is entered, so it never holds earlier than `duration_s` after
+    /// entry.
+    Held {
+        /// The guard that must keep holding.
+        guard: Box<Guard>,
+        /// How long \[s\], positive.
         duration_s: f64,
     },
 }
@@ -1011,10 +1041,36 @@ mod tests {
             panic!("an active state")
         };
         assert_eq!(active.approach, None);
+        assert_eq!(active.lift_off, None);
         assert!(program.tasks[0].steps[0].limits.is_empty());
         // Empty limits and no approach are left out, so skills that use neither serialise (and
         // hash) as before.
         assert_eq!(serde_json::to_value(&program).expect("writes"), old);
+    }
+
+    #[test]
+    fn held_guards_and_lift_offs_serialise_by_name_and_read_back() {
+        let held = Guard::Held {
+            guard: Box::new(Guard::ForceReached { tolerance_n: 0.5 }),
+            duration_s: 0.1,
+        };
+        let json = serde_json::to_value(&held).expect("writes");
+        assert_eq!(
+            json,
+            serde_json::json!({
+                "kind": "held",
+                "guard": {"kind": "force_reached", "tolerance_n": 0.5},
+                "duration_s": 0.1
+            })
+        );
+        assert_eq!(serde_json::from_value::<Guard>(json).expect("reads"), held);
+        let lift = LiftOffSpec {
+            distance_m: 0.02,
+            speed_mps: 0.01,
+        };
+        let json = serde_json::to_value(lift).expect("writes");
+        assert_eq!(json, serde_json::json!({"distance_m": 0.02, "speed_mps": 0.01}));
+        assert_eq!(serde_json::from_value::<LiftOffSpec>(json).expect("reads"), lift);
     }
 
     #[test]

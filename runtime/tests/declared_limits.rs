@@ -6,30 +6,15 @@
 //! The skill is the standard touch (stdlib-skills/touch.skill) written out as IR, since the
 //! runtime never depends on the compiler; it learns from the shipped touch demonstration.
 
-use std::path::PathBuf;
+mod support;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use skill_ir as ir;
-use skill_runtime::demo::{read_csv, ReadOptions};
-use skill_runtime::exec::{bind, simulate, simulate_task, ExecOptions, Mode, RunLog, RunReport, TaskStep};
+use skill_runtime::exec::{bind, simulate_task, ExecOptions, RunLog, RunReport, TaskStep};
 use skill_runtime::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
 use skill_runtime::safety::Quantity;
-use skill_runtime::sim::Scene;
-use skill_runtime::skill::{ir_hash, learn_skill, LearnOptions, Learned};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn span() -> ir::SourceSpan {
-    ir::SourceSpan {
-        file: "touch.skill".into(),
-        line: 1,
-        column: 1,
-        start: 0,
-        end: 0,
-    }
-}
+use skill_runtime::skill::{ir_hash, Learned};
+use support::{learn, run, span, table, Touch};
 
 fn limit(name: &str, value_si: f64) -> ir::Limit {
     ir::Limit {
@@ -42,191 +27,11 @@ fn limit(name: &str, value_si: f64) -> ir::Limit {
 
 /// stdlib-skills/touch.skill as IR, with `limits` and the approach state's `approach`.
 fn touch(limits: Vec<ir::Limit>, approach: Option<ir::Approach>) -> ir::Skill {
-    let contact = ir::FrameRef::Learned(ir::FrameId(0));
-    let contact_z = ir::FrameAxis {
-        frame: contact,
-        axis: ir::Axis::Z,
-    };
-    let end_of_approach = ir::Point::End(ir::SegmentIdx(0));
-    let motion = |name: &str, segment| ir::MotionDecl {
-        name: name.into(),
-        segment: ir::SegmentIdx(segment),
-        basis: 50,
-        span: span(),
-    };
-    let stiffness = [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0];
-    let active = |motion: Option<u32>, position_controlled, force, gains, entry, transitions: &[u32], approach| {
-        ir::StateKind::Active(Box::new(ir::ActiveState {
-            motion: motion.map(ir::MotionId),
-            frame: contact,
-            position_controlled,
-            stiffness,
-            force,
-            gains,
-            entry,
-            transitions: transitions.iter().map(|id| ir::TransitionId(*id)).collect(),
-            approach,
-        }))
-    };
-    let gains = ir::ForceGains {
-        kp: 0.5,
-        ki: 5.0,
-        integral_limit_n: Some(5.0),
-    };
-    let states = [
-        (
-            "approach",
-            active(Some(0), [true; 6], None, gains, Vec::new(), &[0, 1, 2], approach),
-        ),
-        (
-            "settle",
-            active(
-                None,
-                [true, true, false, true, true, true],
-                Some(ir::ForceId(0)),
-                gains,
-                vec![ir::EntryAction::ResetIntegral],
-                &[3, 4],
-                None,
-            ),
-        ),
-        (
-            "retract",
-            active(Some(1), [true; 6], None, gains, Vec::new(), &[5, 6], None),
-        ),
-        (
-            "done",
-            ir::StateKind::Terminal {
-                outcome: ir::Outcome::Success,
-                message: None,
-            },
-        ),
-        (
-            "missed",
-            ir::StateKind::Terminal {
-                outcome: ir::Outcome::Failure,
-                message: Some("no contact".into()),
-            },
-        ),
-        (
-            "stuck",
-            ir::StateKind::Terminal {
-                outcome: ir::Outcome::Failure,
-                message: Some("the return did not finish".into()),
-            },
-        ),
-    ];
-    let goto = |target| ir::TransitionAction::Goto {
-        target: ir::StateId(target),
-    };
-    let transitions = [
-        (
-            0,
-            ir::Guard::Force {
-                along: contact_z,
-                op: ir::Comparison::Ge,
-                rhs: ir::Threshold::Learned { id: ir::ThresholdId(0) },
-            },
-            goto(1),
-        ),
-        (
-            0,
-            ir::Guard::MotionDone,
-            ir::TransitionAction::Extend {
-                along: contact_z,
-                speed_mps: 0.01,
-                max_m: 0.05,
-                then: ir::StateId(4),
-            },
-        ),
-        (0, ir::Guard::Timeout { duration_s: 30.0 }, goto(4)),
-        (
-            1,
-            ir::Guard::And {
-                all: vec![
-                    ir::Guard::ForceReached { tolerance_n: 0.5 },
-                    ir::Guard::Dwell { duration_s: 0.1 },
-                ],
-            },
-            goto(2),
-        ),
-        (1, ir::Guard::Timeout { duration_s: 2.0 }, goto(2)),
-        (2, ir::Guard::MotionDone, goto(3)),
-        (2, ir::Guard::Timeout { duration_s: 30.0 }, goto(5)),
-    ];
-    ir::Skill {
-        name: "touch".into(),
-        doc: String::new(),
-        learn: ir::LearnPlan {
-            segmentation: ir::Segmentation::MaxForce,
-            segments: 2,
-            lowpass_hz: None,
-            resample_hz: None,
-            frames: vec![ir::FrameDecl {
-                name: "contact".into(),
-                source: ir::FrameSource::ForceAlignedAt { point: end_of_approach },
-                span: span(),
-            }],
-            motions: vec![motion("approach", 0), motion("retreat", 1)],
-            forces: vec![ir::ForceDecl {
-                name: "touch_force".into(),
-                source: ir::ForceSource::At {
-                    point: end_of_approach,
-                    along: contact_z,
-                },
-                span: span(),
-            }],
-            thresholds: vec![ir::ThresholdDecl {
-                name: "touch".into(),
-                source: ir::ThresholdSource::ForceAt {
-                    point: end_of_approach,
-                    along: contact_z,
-                    scale: 0.5,
-                },
-                span: span(),
-            }],
-        },
-        initial: ir::StateId(0),
-        states: states
-            .into_iter()
-            .enumerate()
-            .map(|(id, (name, kind))| ir::State {
-                id: ir::StateId(id as u32),
-                name: name.into(),
-                doc: String::new(),
-                kind,
-                span: span(),
-            })
-            .collect(),
-        transitions: transitions
-            .into_iter()
-            .enumerate()
-            .map(|(id, (from, guard, action))| ir::Transition {
-                id: ir::TransitionId(id as u32),
-                from: ir::StateId(from),
-                guard,
-                action,
-                guard_text: String::new(),
-                span: span(),
-            })
-            .collect(),
+    support::touch(Touch {
         limits,
-        span: span(),
-    }
-}
-
-fn learn(skill: &ir::Skill) -> Learned {
-    let loaded = read_csv(&root().join("examples/demos/touch.csv"), &ReadOptions::default()).expect("the demo reads");
-    learn_skill(skill, &loaded.demo, &[], &LearnOptions::default()).expect("touch learns from its demonstration")
-}
-
-fn table() -> Scene {
-    Scene::from_file(&root().join("examples/scenes/table.toml")).expect("the table scene loads")
-}
-
-fn run(skill: &ir::Skill, learned: &Learned, options: &ExecOptions) -> (RunReport, RunLog) {
-    let bound = bind(skill, learned).expect("binds");
-    simulate(&table(), Mode::Skill(&bound), options).expect("runs")
+        approach,
+        ..Touch::default()
+    })
 }
 
 fn cli(name: &str, value: f64) -> ExecOptions {

@@ -28,6 +28,19 @@ impl Checker<'_> {
             GuardKind::Not(inner) => Some(ir::Guard::Not {
                 guard: Box::new(self.guard(inner, scope)?),
             }),
+            GuardKind::Held { guard: inner, duration } => {
+                let resolved = self.guard(inner, scope);
+                let value = self.quantity(duration, Dim::Time, "the hold time");
+                let duration_s = self.positive(value, duration.span, "the hold time");
+                if only_time(inner) {
+                    self.for_on_timed_guard(guard, resolved.as_ref(), duration_s);
+                    return None;
+                }
+                Some(ir::Guard::Held {
+                    guard: Box::new(resolved?),
+                    duration_s: duration_s?,
+                })
+            }
             GuardKind::Force { axis, op, rhs } => {
                 let along = self.frame_axis(axis, false, scope);
                 let dim = match along {
@@ -108,6 +121,29 @@ impl Checker<'_> {
                 None
             }
         }
+    }
+
+    /// `dwell 100 ms for 50 ms`: `dwell` and `timeout` already count time since entry, and once
+    /// they hold they hold until the state is left, so a `for` only adds to their time.
+    fn for_on_timed_guard(&mut self, held: &ast::Guard, inner: Option<&ir::Guard>, hold_s: Option<f64>) {
+        let help = match (inner, hold_s) {
+            (Some(ir::Guard::Dwell { duration_s }), Some(hold_s)) => {
+                format!("write `dwell {}` instead", seconds(duration_s + hold_s))
+            }
+            (Some(ir::Guard::Timeout { duration_s }), Some(hold_s)) => {
+                format!("write `timeout {}` instead", seconds(duration_s + hold_s))
+            }
+            _ => "add the time to the `dwell` or `timeout` and drop the `for`".to_string(),
+        };
+        let diag = self
+            .diag(
+                Code::ForOnTimedGuard,
+                held.span,
+                "`for` on a guard that only counts time",
+                "`dwell` and `timeout` keep holding once they hold",
+            )
+            .help(help);
+        self.report(diag);
     }
 
     fn threshold_ref(&mut self, name: &ast::Ident, dim: Dim, scope: &mut SkillScope) -> Option<ir::Threshold> {
@@ -198,6 +234,7 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             }
+            let mut shadowed = false;
             for (earlier, earlier_guard, _) in &transitions[..index] {
                 if earlier.guard == transition.guard {
                     let diag = self
@@ -210,6 +247,7 @@ impl Checker<'_> {
                         .label(earlier_guard.span, "first written here; it always fires first")
                         .help("remove one of the two transitions");
                     self.report(diag);
+                    shadowed = true;
                     break;
                 }
                 if implies(&transition.guard, &earlier.guard) {
@@ -223,8 +261,24 @@ impl Checker<'_> {
                         .label(earlier_guard.span, "this earlier transition fires first")
                         .help("reorder the transitions or make this guard weaker than the earlier one");
                     self.report(diag);
+                    shadowed = true;
                     break;
                 }
+            }
+            if shadowed {
+                continue;
+            }
+            if let Some(later) = left_before_held(transitions, index) {
+                let diag = self
+                    .diag(
+                        Code::NeverFires,
+                        guard.span,
+                        "this transition can never fire",
+                        "a guard here must hold for a while first",
+                    )
+                    .label(later, "but this later transition leaves as soon as that guard holds")
+                    .help("make the later guard stronger (hold it too, or add a condition), or remove one of the two transitions");
+                self.report(diag);
             }
         }
         let all_force_only = !transitions.is_empty()
@@ -245,6 +299,35 @@ impl Checker<'_> {
     }
 }
 
+/// Whether a guard is `dwell`s and `timeout`s joined by `and`/`or`: it depends only on the time
+/// since entry and keeps holding once it holds, so `for D` only adds `D` to its times. (`not
+/// dwell 1 s for 50 ms`, true from 50 ms to 1 s, is left alone.)
+fn only_time(guard: &ast::Guard) -> bool {
+    match &guard.kind {
+        GuardKind::Or(parts) | GuardKind::And(parts) => parts.iter().all(only_time),
+        GuardKind::Timed { .. } => true,
+        // A `for` inside is judged on its own.
+        GuardKind::Not(_)
+        | GuardKind::Held { .. }
+        | GuardKind::Force { .. }
+        | GuardKind::ForceReached(_)
+        | GuardKind::Named(_) => false,
+    }
+}
+
+/// A duration as a user writes it: `150 ms`, `2.5 s`.
+fn seconds(duration_s: f64) -> String {
+    let trim = |value: f64| {
+        let text = format!("{value:.3}");
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    };
+    if duration_s < 1.0 {
+        format!("{} ms", trim(duration_s * 1e3))
+    } else {
+        format!("{} s", trim(duration_s))
+    }
+}
+
 /// The conjunctive atoms of a guard (the guard itself when it is not an `and`).
 fn conjuncts(guard: &ir::Guard) -> Vec<&ir::Guard> {
     match guard {
@@ -253,7 +336,48 @@ fn conjuncts(guard: &ir::Guard) -> Vec<&ir::Guard> {
     }
 }
 
-/// Whether `a` holding guarantees `b` holds, for the atom forms we can compare.
+/// A held guard (`G for D`) that transition `index` needs, and the span of a later transition
+/// that leaves the state whenever `G` holds, so that `G` never holds for `D` in the state: at
+/// the first tick of any stretch in which `G` holds, the later transition (or an earlier one)
+/// fires. Only when every other transition before the later one enters a state: an `extend`
+/// that starts keeps the state and the later transitions unevaluated that tick.
+fn left_before_held(transitions: &[(ir::Transition, &ast::Guard, Span)], index: usize) -> Option<Span> {
+    let goto = |transition: &ir::Transition| matches!(transition.action, ir::TransitionAction::Goto { .. });
+    let (transition, _, _) = &transitions[index];
+    for atom in necessary(&transition.guard) {
+        let ir::Guard::Held { guard: inner, .. } = atom else {
+            continue;
+        };
+        for (later_index, (later, later_guard, _)) in transitions.iter().enumerate().skip(index + 1) {
+            let others_enter = transitions[..later_index]
+                .iter()
+                .enumerate()
+                .all(|(other, (t, _, _))| other == index || goto(t));
+            if others_enter && goto(later) && implies(inner, &later.guard) {
+                return Some(later_guard.span);
+            }
+        }
+    }
+    None
+}
+
+/// What a guard holding implies at the same evaluation, as atoms: its conjuncts and, for a held
+/// guard (`g for D`), also what `g` implies, since it holds only while `g` holds. A `not` or an
+/// `or` is one atom: nothing is read into them.
+fn necessary(guard: &ir::Guard) -> Vec<&ir::Guard> {
+    match guard {
+        ir::Guard::And { all } => all.iter().flat_map(necessary).collect(),
+        ir::Guard::Held { guard: inner, .. } => {
+            let mut atoms = vec![guard];
+            atoms.extend(necessary(inner));
+            atoms
+        }
+        other => vec![other],
+    }
+}
+
+/// Whether `a` holding guarantees `b` holds, for the atom forms we can compare. Every guard of a
+/// state is evaluated at every tick, so implications hold tick by tick and for held guards too.
 fn atom_implies(a: &ir::Guard, b: &ir::Guard) -> bool {
     use ir::Guard::*;
     if a == b {
@@ -265,6 +389,19 @@ fn atom_implies(a: &ir::Guard, b: &ir::Guard) -> bool {
             Dwell { duration_s: da } | Timeout { duration_s: da },
             Dwell { duration_s: db } | Timeout { duration_s: db },
         ) => da >= db,
+        // A guard held for `da` was entered at least `da` ago.
+        (Held { duration_s: da, .. }, Dwell { duration_s: db } | Timeout { duration_s: db }) => da >= db,
+        // `ga` implying `gb` at every tick, `gb` has held at least as long as `ga`.
+        (
+            Held {
+                guard: ga,
+                duration_s: da,
+            },
+            Held {
+                guard: gb,
+                duration_s: db,
+            },
+        ) => da >= db && implies(ga, gb),
         (
             Force {
                 along: la,
@@ -295,7 +432,7 @@ fn atom_implies(a: &ir::Guard, b: &ir::Guard) -> bool {
 /// Whether `later ⇒ earlier` for conjunctions of atoms: every atom of `earlier` follows from
 /// some atom of `later`. Disjunctions and negations are compared only for equality.
 fn implies(later: &ir::Guard, earlier: &ir::Guard) -> bool {
-    let later_atoms = conjuncts(later);
+    let later_atoms = necessary(later);
     conjuncts(earlier)
         .iter()
         .all(|needed| later_atoms.iter().any(|have| atom_implies(have, needed)))
@@ -303,7 +440,7 @@ fn implies(later: &ir::Guard, earlier: &ir::Guard) -> bool {
 
 /// Whether a conjunction contradicts itself: `a and not a`, or disjoint literal force bounds.
 fn unsatisfiable(guard: &ir::Guard) -> bool {
-    let atoms = conjuncts(guard);
+    let atoms = necessary(guard);
     for (i, a) in atoms.iter().enumerate() {
         for b in &atoms[i + 1..] {
             if let ir::Guard::Not { guard } = a {
@@ -352,7 +489,7 @@ fn unsatisfiable(guard: &ir::Guard) -> bool {
 
 /// An atom of a conjunction that cannot hold in this state, with a label and a help line.
 fn impossible_atom(guard: &ir::Guard, runs_dmp: bool, has_force_axes: bool) -> Option<(&'static str, &'static str)> {
-    for atom in conjuncts(guard) {
+    for atom in necessary(guard) {
         match atom {
             ir::Guard::MotionDone if !runs_dmp => {
                 return Some((
@@ -377,7 +514,7 @@ fn only_force_atoms(guard: &ir::Guard) -> bool {
     match guard {
         ir::Guard::And { all } => all.iter().all(only_force_atoms),
         ir::Guard::Or { any } => any.iter().all(only_force_atoms),
-        ir::Guard::Not { guard } => only_force_atoms(guard),
+        ir::Guard::Not { guard } | ir::Guard::Held { guard, .. } => only_force_atoms(guard),
         ir::Guard::Force { .. } => true,
         _ => false,
     }
@@ -398,5 +535,73 @@ mod tests {
         };
         assert!(implies(&both, &short));
         assert!(!implies(&short, &both));
+    }
+
+    fn held(guard: ir::Guard, duration_s: f64) -> ir::Guard {
+        ir::Guard::Held {
+            guard: Box::new(guard),
+            duration_s,
+        }
+    }
+
+    #[test]
+    fn a_held_guard_implies_its_guard_and_its_time_but_not_the_other_way() {
+        let reached = ir::Guard::ForceReached { tolerance_n: 0.5 };
+        let held_100 = held(reached.clone(), 0.1);
+        assert!(implies(&held_100, &reached));
+        assert!(!implies(&reached, &held_100));
+        // Held 100 ms means entered at least 100 ms ago, and no more.
+        assert!(implies(&held_100, &ir::Guard::Timeout { duration_s: 0.1 }));
+        assert!(!implies(&held_100, &ir::Guard::Dwell { duration_s: 0.2 }));
+        assert!(!implies(&ir::Guard::Dwell { duration_s: 5.0 }, &held_100));
+        // Longer holds of stronger guards imply shorter holds of weaker ones.
+        let held_200 = held(
+            ir::Guard::And {
+                all: vec![reached.clone(), ir::Guard::MotionDone],
+            },
+            0.2,
+        );
+        assert!(implies(&held_200, &held_100));
+        assert!(!implies(&held_100, &held_200));
+        assert!(!implies(&held(reached.clone(), 0.05), &held_100));
+        // `(a and b) for D` implies `a` and `b`; `(a or b) for D` implies neither.
+        assert!(implies(&held_200, &ir::Guard::MotionDone));
+        let either = held(
+            ir::Guard::Or {
+                any: vec![reached.clone(), ir::Guard::MotionDone],
+            },
+            0.2,
+        );
+        assert!(!implies(&either, &reached));
+        // A negated hold tells nothing about its guard.
+        let not_held = ir::Guard::Not {
+            guard: Box::new(held_100.clone()),
+        };
+        assert!(!implies(&not_held, &reached));
+        assert!(!implies(
+            &not_held,
+            &ir::Guard::Not {
+                guard: Box::new(reached.clone())
+            }
+        ));
+    }
+
+    #[test]
+    fn contradictions_and_impossible_atoms_are_found_through_a_hold_only() {
+        let touch = ir::Guard::MotionDone;
+        let not_touch = ir::Guard::Not {
+            guard: Box::new(touch.clone()),
+        };
+        let both = |a: ir::Guard, b: ir::Guard| ir::Guard::And { all: vec![a, b] };
+        assert!(unsatisfiable(&both(held(touch.clone(), 0.1), not_touch.clone())));
+        assert!(unsatisfiable(&held(both(touch.clone(), not_touch.clone()), 0.1)));
+        // `not (a for D) and a` holds while `a` has not held for D yet.
+        let not_held = ir::Guard::Not {
+            guard: Box::new(held(touch.clone(), 0.1)),
+        };
+        assert!(!unsatisfiable(&both(not_held.clone(), touch.clone())));
+        assert!(impossible_atom(&held(touch.clone(), 0.1), false, true).is_some());
+        assert!(impossible_atom(&not_held, false, true).is_none());
+        assert!(impossible_atom(&held(ir::Guard::ForceReached { tolerance_n: 1.0 }, 0.1), true, false).is_some());
     }
 }

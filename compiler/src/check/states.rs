@@ -1,5 +1,5 @@
-//! States: their statements (move, control, stiffness, apply, gains, entry, approach) and
-//! transition targets, lowered to the controller's settings per state (docs/method.md §6).
+//! States: their statements (move, control, stiffness, apply, gains, entry, approach, lift off)
+//! and transition targets, lowered to the controller's settings per state (docs/method.md §6).
 
 use super::scope::{SkillScope, SymKind};
 use super::values::Args;
@@ -26,7 +26,7 @@ pub const DEFAULT_GAINS: ir::ForceGains = ir::ForceGains {
 fn mentions_force(guard: &ast::Guard) -> bool {
     match &guard.kind {
         ast::GuardKind::Or(parts) | ast::GuardKind::And(parts) => parts.iter().any(mentions_force),
-        ast::GuardKind::Not(inner) => mentions_force(inner),
+        ast::GuardKind::Not(inner) | ast::GuardKind::Held { guard: inner, .. } => mentions_force(inner),
         ast::GuardKind::Force { .. } => true,
         ast::GuardKind::Timed { .. } | ast::GuardKind::ForceReached(_) | ast::GuardKind::Named(_) => false,
     }
@@ -167,6 +167,8 @@ impl Checker<'_> {
         let mut entry = Vec::new();
         let mut approach = None;
         let mut approach_span = None;
+        let mut lift_off = None;
+        let mut lift_off_span = None;
         let mut state_transitions: Vec<(ir::Transition, &ast::Guard, Span)> = Vec::new();
 
         for stmt in stmts {
@@ -178,6 +180,7 @@ impl Checker<'_> {
                 StmtKind::Gains(_) => Some("gains"),
                 StmtKind::Entry(_) => Some("entry"),
                 StmtKind::Approach { .. } => Some("approach"),
+                StmtKind::LiftOff { .. } => Some("lift off"),
                 StmtKind::Transition { .. } => None,
             };
             if let Some(keyword) = keyword {
@@ -233,6 +236,10 @@ impl Checker<'_> {
                 StmtKind::Approach { within, speed } => {
                     approach_span = Some(stmt.span);
                     approach = self.approach(within, speed);
+                }
+                StmtKind::LiftOff { distance, speed } => {
+                    lift_off_span = Some(stmt.span);
+                    lift_off = self.lift_off(distance, speed.as_ref(), stmt.span);
                 }
                 StmtKind::Transition { guard, target } => {
                     let resolved_guard = self.guard(guard, scope);
@@ -305,6 +312,15 @@ impl Checker<'_> {
         if let Some(span) = approach_span {
             self.approach_use(state, stmts, span, writes_move);
         }
+        if let Some(span) = lift_off_span {
+            let lifts = lift_off.is_some_and(|spec| spec.distance_m > 0.0);
+            let approaches = approach_span.is_some()
+                || stmts.iter().any(|stmt| match &stmt.kind {
+                    StmtKind::Transition { guard, .. } => mentions_force(guard),
+                    _ => false,
+                });
+            self.lift_off_use(state, span, writes_move, lifts && (has_force_axes || approaches));
+        }
         self.transition_analysis(state, &state_transitions, writes_move, force, has_force_axes, scope);
 
         if self.error_count() > errors_before {
@@ -326,6 +342,7 @@ impl Checker<'_> {
             entry,
             transitions: ids_out,
             approach,
+            lift_off,
         })
     }
 
@@ -371,6 +388,71 @@ impl Checker<'_> {
                     "no `force(...)` guard in this state",
                 )
                 .help("add `on force(FRAME.z) >= THRESHOLD -> STATE` to leave the state on contact, or remove the approach");
+            self.report(diag);
+        }
+    }
+
+    /// `lift off D [at V]`: a distance of zero or more, and a positive speed when it lifts.
+    fn lift_off(&mut self, distance: &ast::Expr, speed: Option<&ast::Expr>, span: Span) -> Option<ir::LiftOffSpec> {
+        let distance_m = self.quantity(distance, Dim::Length, "the lift-off distance");
+        if distance_m.is_some_and(|d| d < 0.0) {
+            let diag = self
+                .diag(
+                    Code::OutOfRange,
+                    distance.span,
+                    "the lift-off distance is negative",
+                    "negative distance",
+                )
+                .help("lift a positive distance away from the surface, or write `lift off 0 mm` for no lift");
+            self.report(diag);
+            return None;
+        }
+        let speed_mps = match speed {
+            Some(speed) => {
+                let value = self.quantity(speed, Dim::Speed, "the lift-off speed");
+                self.positive(value, speed.span, "the lift-off speed")
+            }
+            None if distance_m.is_some_and(|d| d > 0.0) => {
+                let diag = self
+                    .diag(Code::BadArgument, span, "a lift-off needs a speed", "how fast?")
+                    .help(format!("write `lift off {} at 25 mm/s`", self.src.slice(distance.span)));
+                self.report(diag);
+                None
+            }
+            // `lift off 0 mm`: no lift, no speed.
+            None => Some(0.0),
+        };
+        Some(ir::LiftOffSpec {
+            distance_m: distance_m?,
+            speed_mps: speed_mps?,
+        })
+    }
+
+    /// A `lift off` needs a motion to pause; it is never used where the state force-controls an
+    /// axis or approaches a contact (the runtime lifts off only on a learned path under pure
+    /// position control that expects no contact).
+    fn lift_off_use(&mut self, state: &ast::State, span: Span, writes_move: bool, ignored: bool) {
+        if !writes_move {
+            let diag = self
+                .diag(
+                    Code::LiftOffWithoutMove,
+                    span,
+                    format!("state `{}` declares a lift-off but runs no motion", state.name.name),
+                    "no `move` to lift off before",
+                )
+                .help("add `move MOTION` to this state, or declare the lift-off in the state that leaves the contact");
+            self.report(diag);
+            return;
+        }
+        if ignored {
+            let diag = self
+                .diag(
+                    Code::LiftOffIgnored,
+                    span,
+                    format!("state `{}` never lifts off", state.name.name),
+                    "never used here",
+                )
+                .help("only a state under pure position control that approaches no contact (no `approach`, no `force(...)` guard) lifts off; move the lift-off to a state that leaves the contact, or remove it");
             self.report(diag);
         }
     }

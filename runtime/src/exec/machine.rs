@@ -2,6 +2,8 @@
 //! runs (motion, force profile, goal extension), state entry and its actions, guards, the choice
 //! of at most one transition a tick, and the command of an active state.
 
+use std::collections::HashMap;
+
 use nalgebra::{Isometry3, UnitQuaternion, Vector3, Vector6};
 use skill_ir as ir;
 
@@ -59,6 +61,38 @@ pub(super) struct Machine<'b, 'a> {
     /// How fast the motion's clock runs against the run's (below 1 in a guarded approach): the
     /// commanded velocity is the motion's times this.
     clock_rate: f64,
+    /// The current state's `for D` guards: since when each one's guard has held.
+    hold_timers: HeldTimers,
+}
+
+/// Where a held guard (`G for D`) sits: the index of its transition and its place in a
+/// pre-order walk of that transition's guard. Every guard of the state is walked in full at
+/// every evaluation, so the place is the same each time.
+type HeldKey = (usize, usize);
+
+/// Since when the guard of each held guard (`G for D`) of the current state has held without a
+/// break, as run time \[s\]. Cleared when a state is entered, so a hold never counts time from
+/// before the state.
+#[derive(Debug, Default)]
+struct HeldTimers {
+    since: HashMap<HeldKey, f64>,
+}
+
+impl HeldTimers {
+    fn clear(&mut self) {
+        self.since.clear();
+    }
+
+    /// Records whether the guard of held guard `key` holds at run time `t`, and returns whether
+    /// it has held at every evaluation since at least `duration_s` ago (compared as `dwell` is).
+    fn update(&mut self, key: HeldKey, holds: bool, t: f64, duration_s: f64) -> bool {
+        if !holds {
+            self.since.remove(&key);
+            return false;
+        }
+        let since = *self.since.entry(key).or_insert(t);
+        t - since >= duration_s
+    }
 }
 
 /// A state that leaves a contact with a learned motion first lifts the tool off along the
@@ -153,7 +187,7 @@ fn mentions_force(guard: &ir::Guard) -> bool {
     match guard {
         ir::Guard::And { all } => all.iter().any(mentions_force),
         ir::Guard::Or { any } => any.iter().any(mentions_force),
-        ir::Guard::Not { guard } => mentions_force(guard),
+        ir::Guard::Not { guard } | ir::Guard::Held { guard, .. } => mentions_force(guard),
         ir::Guard::Force { .. } => true,
         _ => false,
     }
@@ -208,6 +242,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             target_force: Vector3::zeros(),
             last_frame_z: Vector3::z(),
             clock_rate: 1.0,
+            hold_timers: HeldTimers::default(),
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -245,6 +280,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.lift = None;
         self.ramp_from = None;
         self.clock_rate = 1.0;
+        self.hold_timers.clear();
         let flange = rig.flange();
         self.held = flange;
         let Some(active) = self.active() else { return Ok(()) };
@@ -267,13 +303,21 @@ impl<'b, 'a> Machine<'b, 'a> {
             } else {
                 -self.last_frame_z
             };
-            self.lift = Some(LiftOff {
-                away,
-                from: rig.tool().translation.vector,
-                distance_m: LIFT_OFF_M,
-                speed_mps: LIFT_OFF_SPEED_MPS * self.overrides.speed_factor.min(1.0),
-                done_m: 0.0,
-            });
+            // As the state declares (`lift off D at V`, not scaled by the task's speed; `lift
+            // off 0 mm` for none), or by default.
+            let (distance_m, speed_mps) = match active.lift_off {
+                Some(declared) => (declared.distance_m, declared.speed_mps),
+                None => (LIFT_OFF_M, LIFT_OFF_SPEED_MPS * self.overrides.speed_factor.min(1.0)),
+            };
+            if distance_m > 0.0 {
+                self.lift = Some(LiftOff {
+                    away,
+                    from: rig.tool().translation.vector,
+                    distance_m,
+                    speed_mps,
+                    done_m: 0.0,
+                });
+            }
         }
         let speed = self.overrides.speed_factor;
         if let Some(motion_id) = active.motion {
@@ -391,11 +435,32 @@ impl<'b, 'a> Machine<'b, 'a> {
         runs_something && motion_finished && profile_finished && extension_finished
     }
 
-    fn guard(&self, guard: &ir::Guard, sensed: &Sensed, rig: &Rig<'_>, t: f64) -> bool {
+    /// Whether `guard` holds now. `place` is where the next held guard of the transition sits
+    /// (see [`HeldKey`]). `and` and `or` evaluate every operand, without short cuts, so that every
+    /// held guard sees its guard at every evaluation.
+    fn guard(&mut self, guard: &ir::Guard, sensed: &Sensed, rig: &Rig<'_>, t: f64, place: &mut HeldKey) -> bool {
         match guard {
-            ir::Guard::And { all } => all.iter().all(|g| self.guard(g, sensed, rig, t)),
-            ir::Guard::Or { any } => any.iter().any(|g| self.guard(g, sensed, rig, t)),
-            ir::Guard::Not { guard } => !self.guard(guard, sensed, rig, t),
+            ir::Guard::And { all } => {
+                let mut holds = true;
+                for g in all {
+                    holds &= self.guard(g, sensed, rig, t, place);
+                }
+                holds
+            }
+            ir::Guard::Or { any } => {
+                let mut holds = false;
+                for g in any {
+                    holds |= self.guard(g, sensed, rig, t, place);
+                }
+                holds
+            }
+            ir::Guard::Not { guard } => !self.guard(guard, sensed, rig, t, place),
+            ir::Guard::Held { guard, duration_s } => {
+                let key = *place;
+                place.1 += 1;
+                let holds = self.guard(guard, sensed, rig, t, place);
+                self.hold_timers.update(key, holds, t, *duration_s)
+            }
             ir::Guard::Force { along, op, rhs } => {
                 let axis = self.axis_vector(along, rig);
                 let value = if along.axis.is_rotation() {
@@ -422,10 +487,20 @@ impl<'b, 'a> Machine<'b, 'a> {
         t: f64,
     ) -> Option<(ir::StateId, usize)> {
         let skill = self.skill();
+        // Every guard is evaluated, also after the one that fires, so that held guards see
+        // their guards at every tick.
+        let holds: Vec<bool> = active
+            .transitions
+            .iter()
+            .map(|id| {
+                let mut place = (id.index(), 0);
+                self.guard(&skill.transitions[id.index()].guard, sensed, rig, t, &mut place)
+            })
+            .collect();
         let mut next = None;
-        for transition_id in &active.transitions {
+        for (transition_id, holds) in active.transitions.iter().zip(holds) {
             let transition = &skill.transitions[transition_id.index()];
-            if !self.guard(&transition.guard, sensed, rig, t) {
+            if !holds {
                 continue;
             }
             match &transition.action {
@@ -636,4 +711,54 @@ fn force_error(cmd: &Command, applied: &Vector6<f64>) -> Option<f64> {
         worst = Some(worst.map_or(error.abs(), |w: f64| w.max(error.abs())));
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Feeds a guard's values at 1 ms ticks from `t0`, returning the ticks at which the hold fired.
+    fn fired(timers: &mut HeldTimers, key: HeldKey, t0: f64, values: &[bool], duration_s: f64) -> Vec<usize> {
+        (0..values.len())
+            .filter(|&k| timers.update(key, values[k], t0 + k as f64 * 1e-3, duration_s))
+            .collect()
+    }
+
+    #[test]
+    fn a_hold_fires_after_its_time_of_holding_and_restarts_after_a_drop() {
+        let mut timers = HeldTimers::default();
+        // Holds from tick 10 on: fires from tick 110 (100 ms later), every tick after.
+        let mut values = vec![false; 10];
+        values.extend([true; 150]);
+        let ticks = fired(&mut timers, (0, 0), 0.0, &values, 0.1);
+        assert_eq!(ticks.first(), Some(&110));
+        assert_eq!(ticks.len(), 50);
+        // Drops at tick 60 for one tick: counts again from tick 61, fires at 161.
+        let mut timers = HeldTimers::default();
+        let mut values = vec![true; 200];
+        values[60] = false;
+        let ticks = fired(&mut timers, (0, 0), 0.0, &values, 0.1);
+        assert_eq!(ticks.first(), Some(&161));
+        // Holds never reach 100 ms when the guard drops every 99 ticks.
+        let mut timers = HeldTimers::default();
+        let values: Vec<bool> = (0..1000).map(|k| k % 99 != 0).collect();
+        assert!(fired(&mut timers, (0, 0), 0.0, &values, 0.1).is_empty());
+    }
+
+    #[test]
+    fn holds_are_kept_apart_by_place_and_forgotten_on_entry() {
+        let mut timers = HeldTimers::default();
+        assert!(!timers.update((0, 0), true, 0.0, 0.1));
+        assert!(!timers.update((0, 1), true, 0.05, 0.1));
+        assert!(timers.update((0, 0), true, 0.1, 0.1));
+        assert!(!timers.update((0, 1), true, 0.1, 0.1));
+        assert!(
+            !timers.update((1, 0), true, 0.1, 0.1),
+            "another transition's hold starts now"
+        );
+        // Entering a state clears them: a guard that held before counts from the entry.
+        timers.clear();
+        assert!(!timers.update((0, 0), true, 0.15, 0.1));
+        assert!(timers.update((0, 0), true, 0.25, 0.1));
+    }
 }

@@ -1,5 +1,7 @@
-//! Benchmark: the whole closed loop (state machine + controller + rapier + sensor) running the
-//! slide skill as demonstrated; reports simulated steps per wall second (target ≥ 15 000).
+//! Benchmark: the whole closed loop (state machine + controller + rapier + sensor + safety
+//! supervisor) running the slide skill as demonstrated; reports simulated steps per wall second
+//! (target ≥ 15 000). Beside it, the same run with every supervisor check that can be switched
+//! off set to `inf`: the supervisor's cost, measured in the same sitting.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode};
@@ -31,6 +33,16 @@ fn slide_closed_loop(c: &mut Criterion) {
     group.throughput(Throughput::Elements(steps));
     group.bench_function("slide as demonstrated (1 kHz steps)", |b| {
         b.iter(|| simulate(&scene, Mode::Skill(&bound), &options).expect("runs"))
+    });
+    let unchecked = ExecOptions {
+        limits: skill_runtime::safety::LIMIT_NAMES
+            .iter()
+            .map(|spec| (spec.name.to_string(), f64::INFINITY))
+            .collect(),
+        ..options.clone()
+    };
+    group.bench_function("slide as demonstrated, supervisor limits off (1 kHz steps)", |b| {
+        b.iter(|| simulate(&scene, Mode::Skill(&bound), &unchecked).expect("runs"))
     });
     group.finish();
 }

@@ -41,6 +41,8 @@ pub struct RealResult {
     pub contact_share: Option<f64>,
     /// Whether the file's forces were negated to skillc's convention.
     pub sign_flipped: bool,
+    /// Whether the reproduction started from the file's joint angles.
+    pub start_from_demo: bool,
 }
 
 /// A demonstration whose force does not change between most consecutive samples: the sensor
@@ -106,6 +108,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         force_rms_rel: None,
         contact_share: None,
         sign_flipped: false,
+        start_from_demo: false,
     };
     let loaded = match read_csv(path, &ReadOptions { min_samples: 30 }) {
         Ok(loaded) => loaded,
@@ -171,11 +174,18 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     let top_down = UnitQuaternion::from_rotation_matrix(&Rotation3::face_towards(&z, &Vector3::x()));
     let (roll, pitch, yaw) =
         (top_down * UnitQuaternion::from_euler_angles(0.0, std::f64::consts::PI, 0.0)).euler_angles();
-    let sets = vec![
+    let mut sets = vec![
         format!("table.xyz=[{}, {}, {}]", centre.x, centre.y, centre.z),
         format!("table.rpy=[{roll}, {pitch}, {yaw}]"),
         "table.size=[0.8, 0.8, 0.05]".to_string(),
     ];
+    // Start the arm as the demonstrator held it (the file's joint angles), not in whatever
+    // configuration the scene's q0 gives: the same flange pose has other elbow positions.
+    if let Some(q) = start_joints(path) {
+        let list: Vec<String> = q.iter().map(|v| format!("{v}")).collect();
+        sets.push(format!("robot.q0=[{}]", list.join(", ")));
+        result.start_from_demo = true;
+    }
     let scene = match load_scene(table_scene, &sets) {
         Ok(scene) => scene,
         Err(Failure::Input(m) | Failure::Usage(m)) => {
@@ -202,4 +212,20 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         Err(err) => result.reproduction = Some(error_chain(&err)),
     }
     result
+}
+
+/// The joint angles of a demonstration's first sample, when the file has the columns `q1` to
+/// `q7` (as the LASA LWR-IV recordings do) and they are finite.
+fn start_joints(path: &Path) -> Option<Vec<f64>> {
+    let mut reader = csv::ReaderBuilder::new().flexible(true).from_path(path).ok()?;
+    let headers = reader.headers().ok()?.clone();
+    let columns: Vec<usize> = (1..=7)
+        .map(|j| headers.iter().position(|h| h.trim() == format!("q{j}")))
+        .collect::<Option<_>>()?;
+    let first = reader.records().next()?.ok()?;
+    let q: Vec<f64> = columns
+        .iter()
+        .map(|&c| first.get(c).and_then(|v| v.trim().parse::<f64>().ok()))
+        .collect::<Option<_>>()?;
+    q.iter().all(|v| v.is_finite()).then_some(q)
 }

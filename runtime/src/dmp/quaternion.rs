@@ -168,6 +168,11 @@ impl QuatRollout {
         self.q
     }
 
+    /// The time constant it runs with \[s\].
+    pub fn tau_s(&self) -> f64 {
+        self.tau_s
+    }
+
     /// Current angular velocity `ω = η / τ` \[rad/s\], base frame.
     pub fn angular_velocity(&self) -> Vector3<f64> {
         self.eta / self.tau_s

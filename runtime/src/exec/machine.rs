@@ -322,7 +322,9 @@ impl<'b, 'a> Machine<'b, 'a> {
         let speed = self.overrides.speed_factor;
         if let Some(motion_id) = active.motion {
             let learned = self.bound.motions[motion_id.index()];
-            let rollout = MotionRollout::start(learned, &flange, self.overrides.goal_offset_m, speed)
+            let lever = rig.flange_to_tool().translation.vector.norm();
+            let max_speed = rig.limits().tool_speed_mps;
+            let rollout = MotionRollout::start(learned, &flange, self.overrides.goal_offset_m, speed, max_speed, lever)
                 .map_err(|err| self.motion_error(&self.skill().learn.motions[motion_id.index()].name, &err))?;
             self.motion = Some(RunningMotion {
                 id: motion_id.index(),
@@ -396,7 +398,11 @@ impl<'b, 'a> Machine<'b, 'a> {
                 } else {
                     self.time_in_state(t)
                 };
-                let elapsed = clock * self.overrides.speed_factor;
+                let speed = self
+                    .motion
+                    .as_ref()
+                    .map_or(self.overrides.speed_factor, |m| m.rollout.speed);
+                let elapsed = clock * speed;
                 let pose = learned.at(elapsed);
                 match learned.kind().origin() {
                     crate::skill::FrameOrigin::Learned => pose,

@@ -390,14 +390,19 @@ fn replay_loop(
         let enter_s = rig.time_s() - start_s;
         match motion {
             Some((name, motion)) => {
-                let mut rollout =
-                    MotionRollout::start(motion, &held, options.overrides.goal_offset_m, speed).map_err(|err| {
-                        ExecError::Motion {
-                            state: state_name.clone(),
-                            motion: (*name).clone(),
-                            reason: err.to_string(),
-                        }
-                    })?;
+                let mut rollout = MotionRollout::start(
+                    motion,
+                    &held,
+                    options.overrides.goal_offset_m,
+                    speed,
+                    rig.limits().tool_speed_mps,
+                    rig.flange_to_tool().translation.vector.norm(),
+                )
+                .map_err(|err| ExecError::Motion {
+                    state: state_name.clone(),
+                    motion: (*name).clone(),
+                    reason: err.to_string(),
+                })?;
                 let steps = ((motion.position.tau_s / speed) / dt).round() as usize;
                 for _ in 0..steps {
                     rollout.step(motion, dt);

@@ -24,6 +24,7 @@ mod kinematics;
 mod model;
 
 pub use error::RobotError;
+pub use ik::LWR4_ELBOW_UP;
 pub use inspect::{Inspection, JointSummary};
 pub use kinematics::RobotData;
 pub use model::{

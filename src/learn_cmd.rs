@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use skill_runtime::demo::{Dialect, COLUMNS};
+use skill_runtime::demo::{Dialect, ForceSign, WrenchDeclaration, WrenchFrame, COLUMNS};
 use skill_runtime::exec::bind;
 use skill_runtime::skill::{LearnOptions, Learned, LearnedForce, LearnedFrame};
 
@@ -44,13 +44,55 @@ pub struct LearnArgs {
     #[arg(long, value_name = "OURS=THEIRS,...", value_parser = parse_columns)]
     pub columns: Option<BTreeMap<String, String>>,
     /// The file's forces are the force the robot applies (not, as skillc expects, the force the
-    /// environment exerts on the tool): negate them before learning.
-    #[arg(long)]
+    /// environment exerts on the tool): negate them before learning. The same as
+    /// `--force-sign applied`.
+    #[arg(long, conflicts_with = "force_sign")]
     pub applied_force: bool,
+    /// Which wrench the file stores: `on-tool` (what a wrist sensor reports) or `applied` (the
+    /// robot's, negated before learning). Default: the file's `# force_sign:` line, else detected.
+    #[arg(long, value_name = "SIGN")]
+    pub force_sign: Option<ForceSign>,
+    /// The axes of the file's force and moment columns: `base` (the robot base frame) or `sensor`
+    /// (the wrist sensor's, taken as the flange's; rotated into the base frame by the flange
+    /// orientation). Default: the file's `# wrench_frame:` line, else detected.
+    #[arg(long, value_name = "FRAME")]
+    pub wrench_frame: Option<WrenchFrame>,
+    /// For a sensor-frame wrench: the angle in degrees (-360 to 360) the sensor's axes are turned
+    /// from the flange's about the tool axis. Default: the file's `# sensor_turn:` line, else
+    /// detected among 0, 90, 180 and 270.
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = parse_turn)]
+    pub sensor_turn: Option<f64>,
+    /// Keep the sensor bias: do not remove the mean wrench of a still, contact-free period.
+    #[arg(long)]
+    pub keep_bias: bool,
+    /// The friction coefficient µ (0.01 to 100, default 0.5) that bounds how far the contact force
+    /// may lean from a fitted plane's normal (atan µ); beyond it z follows the applied force.
+    #[arg(long, value_name = "MU", value_parser = parse_friction)]
+    pub friction: Option<f64>,
     /// Also draw what was learned into this folder (SVG): the demonstration against the
     /// rollout with segments and frames, forces in the world and compliant frames.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+}
+
+/// `--friction`: a friction coefficient from 0.01 to 100.
+pub fn parse_friction(text: &str) -> Result<f64, String> {
+    let mu: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if (0.01..=100.0).contains(&mu) {
+        Ok(mu)
+    } else {
+        Err(format!("{mu} is outside 0.01 to 100"))
+    }
+}
+
+/// `--sensor-turn`: an angle from -360 to 360 degrees.
+pub fn parse_turn(text: &str) -> Result<f64, String> {
+    let deg: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if (-360.0..=360.0).contains(&deg) {
+        Ok(deg)
+    } else {
+        Err(format!("{deg} is outside -360 to 360 degrees"))
+    }
 }
 
 /// `--delimiter`: one character, or `tab`.
@@ -118,6 +160,13 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
     let options = LearnOptions {
         lowpass_hz: args.lowpass,
         resample_hz: args.resample,
+        wrench: WrenchDeclaration {
+            frame: args.wrench_frame,
+            sign: args.force_sign,
+            sensor_turn_deg: args.sensor_turn,
+        },
+        keep_bias: args.keep_bias,
+        friction_mu: args.friction,
     };
     let dialect = Dialect {
         delimiter: args.delimiter,
@@ -168,6 +217,11 @@ pub fn summary(learned: &Learned) -> String {
             learned.quality.smoothing
         );
     }
+    if let Some(wrench) = &learned.quality.wrench {
+        let _ = writeln!(out, "  wrench: {}", wrench.frame);
+        let _ = writeln!(out, "  bias: {}", wrench.bias);
+        let _ = writeln!(out, "  sign: {}", wrench.sign);
+    }
     for warning in &learned.demo.warnings {
         let _ = writeln!(out, "  warning: {warning}");
     }
@@ -213,6 +267,20 @@ pub fn summary(learned: &Learned) -> String {
             z.y,
             z.z
         );
+        if let Some(check) = learned.quality.normals.get(name) {
+            let _ = writeln!(
+                out,
+                "  {:<10} fitted normal {:.1}° from the mean applied force (friction cone {:.1}°): {}",
+                "",
+                check.angle_deg,
+                check.cone_deg,
+                if check.replaced {
+                    "replaced by the force's direction"
+                } else {
+                    "kept"
+                }
+            );
+        }
     }
     if !learned.motions.is_empty() {
         let _ = writeln!(out, "motions (reconstruction RMS):");

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use skill_runtime::demo::{negate_wrench, read_csv_as, stores_applied_force, DemoError, Dialect, ReadOptions};
+use skill_runtime::demo::{read_csv_as, DemoError, Dialect, ForceSign, ReadOptions};
 use skill_runtime::sim::{Scene, SceneError};
 use skill_runtime::skill::validate::InvalidLearned;
 use skill_runtime::skill::{learn_skill, LearnOptions, Learned, LEARNED_VERSION};
@@ -101,8 +101,8 @@ pub fn learn_from_files(skill: &skill_ir::Skill, demo_path: &Path, options: &Lea
     learn_from_file(skill, demo_path, options, false)
 }
 
-/// Like [`learn_from_files`], optionally negating the file's wrench first (`applied_force`).
-/// Warns when the forces look like the force the robot applies and were not negated.
+/// Like [`learn_from_files`], optionally declaring that the file stores the force the robot
+/// applies (`applied_force`); otherwise the learner detects the sign (docs/method.md §1).
 pub fn learn_from_file(
     skill: &skill_ir::Skill,
     demo_path: &Path,
@@ -144,7 +144,7 @@ pub fn learn_from_demo(
             limits::check(flag, value, limits::RATE_HZ, " Hz").map_err(Failure::Usage)?;
         }
     }
-    let mut loaded = read_csv_as(demo_path, &ReadOptions::default(), dialect).map_err(|err| match &err {
+    let loaded = read_csv_as(demo_path, &ReadOptions::default(), dialect).map_err(|err| match &err {
         // A file that cannot be read is an IO error; one that is not UTF-8 text is bad input.
         DemoError::Io { source, .. } if source.kind() != std::io::ErrorKind::InvalidData => {
             Failure::Usage(error_chain(&err))
@@ -176,16 +176,14 @@ pub fn learn_from_demo(
             )));
         }
     }
-    let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    // The wrench's frame and sign: the flags' declarations over the file's, the rest detected.
+    let mut options = options.clone();
     if applied_force {
-        negate_wrench(&mut loaded.demo);
-    } else if stores_applied_force(&loaded.demo) {
-        warnings.push(
-            "in contact the force points into the surface: if the file stores the force the robot applies, pass --applied-force"
-                .to_string(),
-        );
+        options.wrench.sign = Some(ForceSign::Applied);
     }
-    let learned = learn_skill(skill, &loaded.demo, &warnings, options).map_err(|err| {
+    options.wrench = options.wrench.or(loaded.wrench);
+    let learned = learn_skill(skill, &loaded.demo, &warnings, &options).map_err(|err| {
         let message = error_chain(&err);
         let file = file.to_string();
         if message.contains(&file) {

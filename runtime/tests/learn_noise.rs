@@ -75,6 +75,7 @@ fn learn(demo: &Demo, lowpass_hz: Option<f64>) -> Result<Learned, LearnError> {
     let options = LearnOptions {
         lowpass_hz,
         resample_hz: None,
+        ..LearnOptions::default()
     };
     learn_skill(&two_motions(), demo, &[], &options)
 }

@@ -11,6 +11,12 @@
 //! the name [`Dialect::columns`] maps it to (`t` → `time`), then common spellings of other
 //! tools, compared without case or punctuation (`time`/`timestamp`, `x`/`pos_x`/`position.x`,
 //! `orientation.w`, `force_x`/`wrench.force.x`, `torque_x`/`tx`).
+//!
+//! Three comment lines declare the wrench's conventions (docs/method.md §1), anywhere in the file,
+//! `:` or `=` between key and value, case ignored: `# wrench_frame: base|sensor` (the axes the
+//! force and moment columns are written in), `# force_sign: on-tool|applied` (which of the two
+//! opposite wrenches they hold) and `# sensor_turn: DEG` (a sensor-frame wrench's axes turned
+//! from the flange's about the tool axis). Undeclared, all three are detected when learning.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -19,6 +25,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::quat::make_continuous;
+use super::wrench::{ForceSign, WrenchDeclaration, WrenchFrame};
 use super::{Demo, DemoError, DemoWarning, Loaded};
 
 /// The required columns, in the order the reader stores them.
@@ -172,6 +179,43 @@ fn line_of(text: &str, byte: usize) -> usize {
     1 + before + skipped
 }
 
+/// The declarations in the comment lines of `text` (see the module docs).
+fn declarations(file: &str, text: &str) -> Result<WrenchDeclaration, DemoError> {
+    let mut declared = WrenchDeclaration::default();
+    for (index, line) in text.lines().enumerate() {
+        let Some(comment) = line.trim().strip_prefix('#') else {
+            continue;
+        };
+        let Some((key, value)) = comment.split_once([':', '=']) else {
+            continue;
+        };
+        let key = key.trim().to_ascii_lowercase().replace(['-', ' '], "_");
+        let bad = |reason: String| DemoError::BadDeclaration {
+            file: file.to_owned(),
+            row: index + 1,
+            reason,
+        };
+        match key.as_str() {
+            "wrench_frame" => declared.frame = Some(value.parse::<WrenchFrame>().map_err(bad)?),
+            "force_sign" => declared.sign = Some(value.parse::<ForceSign>().map_err(bad)?),
+            "sensor_turn" => {
+                let deg = value
+                    .trim()
+                    .trim_end_matches("deg")
+                    .trim_end_matches('°')
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|deg| (-360.0..=360.0).contains(deg))
+                    .ok_or_else(|| bad(format!("`{}` is not a turn in degrees (-360 to 360)", value.trim())))?;
+                declared.sensor_turn_deg = Some(deg);
+            }
+            _ => {}
+        }
+    }
+    Ok(declared)
+}
+
 /// Parses one field: a number, with a decimal comma accepted when `,` is not the separator.
 fn number(text: &str, delimiter: u8) -> Option<f64> {
     text.parse().ok().or_else(|| {
@@ -190,6 +234,7 @@ pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded
 /// messages.
 pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dialect) -> Result<Loaded, DemoError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let wrench = declarations(file, text)?;
     let header_line = text
         .lines()
         .map(str::trim)
@@ -342,7 +387,7 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
             first_row: rows[first],
         });
     }
-    Ok(Loaded { demo, warnings })
+    Ok(Loaded { demo, warnings, wrench })
 }
 
 #[cfg(test)]
@@ -545,5 +590,29 @@ mod tests {
         );
         let err = parse(&text).expect_err("not a number");
         assert!(matches!(err, DemoError::NotANumber { row: 7, .. }), "{err}");
+    }
+
+    #[test]
+    fn comment_lines_declare_the_wrench_frame_sign_and_turn() {
+        let text = format!(
+            "# recorded: 2019-02-14\n# Wrench-Frame: sensor\n# force_sign = applied\n# sensor_turn: 180 deg\n{HEADER}\n{}\n{}\n",
+            row(0.0),
+            row(0.01)
+        );
+        let loaded = parse(&text).expect("declarations are comments");
+        assert_eq!(
+            loaded.wrench,
+            WrenchDeclaration {
+                frame: Some(WrenchFrame::Sensor),
+                sign: Some(ForceSign::Applied),
+                sensor_turn_deg: Some(180.0),
+            }
+        );
+        let plain = parse(&format!("{HEADER}\n{}\n{}\n", row(0.0), row(0.01))).expect("valid");
+        assert_eq!(plain.wrench, WrenchDeclaration::default());
+        let text = format!("{HEADER}\n# wrench_frame: tool0\n{}\n{}\n", row(0.0), row(0.01));
+        let err = parse(&text).expect_err("unknown frame");
+        assert!(matches!(err, DemoError::BadDeclaration { row: 2, .. }), "{err}");
+        assert!(err.to_string().contains("`base` or `sensor`"), "{err}");
     }
 }

@@ -4,6 +4,8 @@
 //! measures, that is the wrench the *environment exerts on the tool*, in the robot base frame.
 //! The wrench the robot applies to the environment is its negative. Every module of the runtime
 //! keeps this convention; functions that need the applied force negate explicitly and say so.
+//! A file may store its wrench in the sensor's axes or with the other sign: [`prepare_wrench`]
+//! (run first by every learning run) settles both and removes the sensor's bias.
 //!
 //! Units are SI throughout: seconds, metres, newtons, newton-metres. Poses are the tool (flange)
 //! pose in the robot base frame.
@@ -16,6 +18,7 @@ mod quat;
 mod resample;
 mod sign;
 mod timing;
+mod wrench;
 
 pub use self::csv::{parse_csv, parse_csv_as, read_csv, read_csv_as, Dialect, ReadOptions, COLUMNS};
 pub use self::filter::{low_pass, low_pass_motion, FilterOrder};
@@ -24,8 +27,12 @@ pub use self::prepare::{
     default_motion_cutoff_hz, prepare, Prepared, Smoothing, DEFAULT_MOTION_CUTOFF_HZ, MOTION_BAND_HZ,
 };
 pub use self::resample::resample;
-pub use self::sign::{negate_wrench, stores_applied_force};
+pub use self::sign::{negate_wrench, sign_evidence, stores_applied_force, SignEvidence};
 pub use self::timing::{check_timing, median_step_s, GAP_ERROR_S, GAP_FACTOR, MAX_RATE_HZ, MIN_RATE_HZ};
+pub use self::wrench::{
+    prepare_wrench, BiasFinding, ForceSign, FrameEvidence, FrameFinding, FrameStatistic, Origin, SignFinding,
+    WrenchDeclaration, WrenchFrame, WrenchOptions, WrenchReport, SENSOR_TURNS_DEG,
+};
 
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
@@ -170,6 +177,8 @@ pub struct Loaded {
     pub demo: Demo,
     /// What was fixed on the way.
     pub warnings: Vec<DemoWarning>,
+    /// What the file's `# wrench_frame:`, `# force_sign:` and `# sensor_turn:` lines declare.
+    pub wrench: WrenchDeclaration,
 }
 
 /// Optional preprocessing applied after reading: first resampling, then low-pass filtering.
@@ -343,6 +352,16 @@ pub enum DemoError {
         median_step_s: f64,
         /// How many such gaps the file has.
         count: usize,
+    },
+    /// A `# wrench_frame:`, `# force_sign:` or `# sensor_turn:` line with a value skillc does not know.
+    #[error("row {row} of `{file}`: {reason}")]
+    BadDeclaration {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        row: usize,
+        /// What is wrong.
+        reason: String,
     },
     /// Filtering needs evenly spaced samples.
     #[error("demonstration `{file}` is irregularly sampled (period {min_dt_s:.3e}..{max_dt_s:.3e} s): resample it before filtering")]

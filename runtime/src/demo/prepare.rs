@@ -1,11 +1,13 @@
-//! The preprocessing every learning run applies: the time checks, the noise estimate, and either
-//! the template's own preprocessing or the default smoothing of the motion (docs/method.md §1).
+//! The preprocessing every learning run applies: the time checks, the wrench's frame, bias and
+//! sign, the noise estimate, and either the template's own preprocessing or the default
+//! smoothing of the motion (docs/method.md §1).
 
 use std::fmt;
 
 use super::filter::{low_pass_motion, FilterOrder};
 use super::noise::position_noise_m;
 use super::timing::{check_timing, median_step_s};
+use super::wrench::{prepare_wrench, WrenchOptions, WrenchReport};
 use super::{preprocess, Demo, DemoError, DemoWarning, PreprocessConfig};
 
 /// The top of the band hand-guided motion occupies \[Hz\]: voluntary arm motion stays below
@@ -85,14 +87,18 @@ pub struct Prepared {
     pub position_noise_m: Option<f64>,
     /// How it was smoothed.
     pub smoothing: Smoothing,
+    /// The wrench's frame, bias and sign, as found and settled.
+    pub wrench: WrenchReport,
 }
 
-/// Prepares `demo` for learning: checks its time column ([`check_timing`]), estimates its
-/// position noise, resamples it when `config` says so, then low-passes it at `config`'s
-/// cut-off (everything) or, when there is none, its motion at [`default_motion_cutoff_hz`].
-/// A cut-off of 0 switches smoothing off.
-pub fn prepare(demo: &Demo, config: &PreprocessConfig) -> Result<Prepared, DemoError> {
+/// Prepares `demo` for learning: checks its time column ([`check_timing`]), settles its
+/// wrench ([`prepare_wrench`]: frame, bias, sign), estimates its position noise, resamples it
+/// when `config` says so, then low-passes it at `config`'s cut-off (everything) or, when there
+/// is none, its motion at [`default_motion_cutoff_hz`]. A cut-off of 0 switches smoothing off.
+pub fn prepare(demo: &Demo, config: &PreprocessConfig, wrench: &WrenchOptions) -> Result<Prepared, DemoError> {
     let mut warnings = check_timing(demo)?;
+    let (settled, wrench) = prepare_wrench(demo, wrench);
+    let demo = &settled;
     let position_noise_m = position_noise_m(&demo.t_s, &demo.position_m);
     let explicit = PreprocessConfig {
         lowpass_cutoff_hz: config.lowpass_cutoff_hz.filter(|&hz| hz != 0.0),
@@ -126,6 +132,7 @@ pub fn prepare(demo: &Demo, config: &PreprocessConfig) -> Result<Prepared, DemoE
         warnings,
         position_noise_m,
         smoothing,
+        wrench,
     })
 }
 

@@ -14,27 +14,53 @@ pub fn negate_wrench(demo: &mut Demo) {
     }
 }
 
-/// Whether a demonstration stores the force the robot applies rather than the force on the
-/// tool (the LASA files do not document theirs): in contact, the force on the tool points away
-/// from the surface, back towards where the tool came from. The contact is taken where the
-/// force is largest, the way back as the direction to the first sample.
-pub fn stores_applied_force(demo: &Demo) -> bool {
-    let Some((peak, _)) = demo
+/// What the sign check looks at (docs/method.md §1), in the base frame.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SignEvidence {
+    /// Distance from the sample of largest force back to the first sample \[m\].
+    pub back_m: f64,
+    /// Cosine between the mean force of the samples above half the peak and the way back to
+    /// the first sample: near +1 for the force on the tool, negative for the applied force.
+    pub cos_back: f64,
+}
+
+impl SignEvidence {
+    /// Whether the figures decide the sign: the tool came from at least 1 cm away and the
+    /// force points clearly to one side of the way back (more than 11.5° off perpendicular).
+    pub fn decisive(&self) -> bool {
+        self.back_m > 0.01 && self.cos_back.abs() >= 0.2
+    }
+}
+
+/// The figures of the sign check, or `None` without any force: the contact is taken where the
+/// force is largest, the way back as the direction to the first sample. In contact, the force
+/// on the tool points away from the surface, back towards where the tool came from.
+pub fn sign_evidence(demo: &Demo) -> Option<SignEvidence> {
+    let (peak, _) = demo
         .force_n
         .iter()
         .enumerate()
-        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
-    else {
-        return false;
-    };
+        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))?;
+    let peak_n = demo.force_n[peak].norm();
+    if peak_n == 0.0 {
+        return None;
+    }
     let back = demo.position_m[0] - demo.position_m[peak];
-    let strong: Vec<&Vector3<f64>> = demo
-        .force_n
-        .iter()
-        .filter(|f| f.norm() > 0.5 * demo.force_n[peak].norm())
-        .collect();
+    let strong: Vec<&Vector3<f64>> = demo.force_n.iter().filter(|f| f.norm() > 0.5 * peak_n).collect();
     let mean: Vector3<f64> = strong.iter().copied().sum::<Vector3<f64>>() / strong.len().max(1) as f64;
-    back.norm() > 0.01 && mean.dot(&back) < 0.0
+    let scale = mean.norm() * back.norm();
+    Some(SignEvidence {
+        back_m: back.norm(),
+        cos_back: if scale > 0.0 { mean.dot(&back) / scale } else { 0.0 },
+    })
+}
+
+/// Whether a demonstration stores the force the robot applies rather than the force on the
+/// tool (the LASA files do not document theirs), by [`sign_evidence`]: the tool came from more
+/// than 1 cm away and the contact force points away from where it came from. The forces must
+/// be in the base frame.
+pub fn stores_applied_force(demo: &Demo) -> bool {
+    sign_evidence(demo).is_some_and(|e| e.back_m > 0.01 && e.cos_back < 0.0)
 }
 
 #[cfg(test)]

@@ -338,6 +338,32 @@ pub struct Quality {
     /// How the demonstration was smoothed before learning, e.g. `motion low-pass 20 Hz (default)`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub smoothing: String,
+    /// The wrench's frame, bias and sign as found before learning (docs/method.md §1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wrench: Option<crate::demo::WrenchReport>,
+    /// Per frame fitted to a plane: its normal checked against the applied force (docs/method.md §4).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub normals: BTreeMap<String, NormalCheck>,
+}
+
+/// A fitted plane's normal against the mean applied force of its segment (docs/method.md §4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NormalCheck {
+    /// The segment the plane was fitted to (1-based).
+    pub segment: usize,
+    /// The fitted normal, into the surface (unit, base frame).
+    pub fitted_z: [f64; 3],
+    /// The direction of the mean applied force over the segment's samples in contact (unit, base frame).
+    pub force_direction: [f64; 3],
+    /// The angle between them \[°\].
+    pub angle_deg: f64,
+    /// The friction cone's half angle, `atan µ` \[°\].
+    pub cone_deg: f64,
+    /// The steady friction coefficient the sliding samples show (removed from the force when
+    /// the normal is replaced).
+    pub friction: f64,
+    /// Whether z was replaced by the applied force's direction (without friction).
+    pub replaced: bool,
 }
 
 /// How well a motion reproduces its segment.

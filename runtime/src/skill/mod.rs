@@ -10,8 +10,8 @@ pub mod learned;
 pub mod rollout;
 pub mod validate;
 
-pub use learn::{learn_skill, LearnError, LearnOptions};
+pub use learn::{learn_skill, LearnError, LearnOptions, DEFAULT_FRICTION_MU};
 pub use learned::{
     ir_hash, FrameKind, FrameOrigin, FramePose, Learned, LearnedForce, LearnedFrame, LearnedMotion, LearnedSegment,
-    Quality, LEARNED_VERSION,
+    NormalCheck, Quality, LEARNED_VERSION,
 };

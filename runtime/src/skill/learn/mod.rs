@@ -15,13 +15,14 @@ mod motions;
 mod smoothing;
 
 pub use self::error::LearnError;
+pub use self::frames::DEFAULT_FRICTION_MU;
 
 use nalgebra::{UnitQuaternion, Vector3};
 use skill_ir as ir;
 use std::collections::BTreeMap;
 
 use super::learned::{ir_hash, DemoInfo, Learned, LearnedFrame, LearnedSegment, Quality, LEARNED_VERSION};
-use crate::demo::{prepare, Demo, FilterOrder, PreprocessConfig, Smoothing};
+use crate::demo::{prepare, Demo, FilterOrder, PreprocessConfig, Smoothing, WrenchDeclaration, WrenchOptions};
 use crate::learn::segment::{segment_demo, Segment, SegmentError, Segmentation};
 
 /// Options of `skillc learn` that override the template.
@@ -32,6 +33,14 @@ pub struct LearnOptions {
     pub lowpass_hz: Option<f64>,
     /// Resampling rate \[Hz\], replacing the template's `resample`.
     pub resample_hz: Option<f64>,
+    /// The wrench's frame and sign, when known; what is not declared is detected
+    /// (docs/method.md §1).
+    pub wrench: WrenchDeclaration,
+    /// Leave the sensor bias in instead of removing the mean of a still, contact-free period.
+    pub keep_bias: bool,
+    /// The friction coefficient µ that bounds how far the contact force may lean from a fitted
+    /// plane's normal, `atan µ` (docs/method.md §4); [`DEFAULT_FRICTION_MU`] when `None`.
+    pub friction_mu: Option<f64>,
 }
 
 /// Forces below this are not contact \[N\].
@@ -51,7 +60,11 @@ pub fn learn_skill(
         lowpass_cutoff_hz: options.lowpass_hz.or(plan.lowpass_hz),
         lowpass_order: FilterOrder::default(),
     };
-    let prepared = prepare(demo, &config)?;
+    let wrench = WrenchOptions {
+        declared: options.wrench,
+        keep_bias: options.keep_bias,
+    };
+    let prepared = prepare(demo, &config, &wrench)?;
     let demo = prepared.demo;
     let mut warnings = warnings.to_vec();
     warnings.extend(prepared.warnings.iter().map(ToString::to_string));
@@ -69,9 +82,11 @@ pub fn learn_skill(
         quality: Quality {
             position_noise_m: prepared.position_noise_m,
             smoothing: prepared.smoothing.to_string(),
+            wrench: Some(prepared.wrench.clone()),
             ..Quality::default()
         },
         smoothing: prepared.smoothing,
+        friction_mu: options.friction_mu.unwrap_or(DEFAULT_FRICTION_MU),
         warnings: Vec::new(),
     };
 
@@ -170,6 +185,8 @@ struct Learner<'a> {
     quality: Quality,
     /// How the demonstration was smoothed (the plausibility checks' advice depends on it).
     smoothing: Smoothing,
+    /// The friction coefficient of the normal check (docs/method.md §4).
+    friction_mu: f64,
     /// Warnings raised while learning.
     warnings: Vec<String>,
 }

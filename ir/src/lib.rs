@@ -254,6 +254,11 @@ pub const LIMITS: &[LimitSpec] = &[
         dim: LimitDim::Angle,
         what: "the largest orientation error on position-controlled rotation axes",
     },
+    LimitSpec {
+        name: "arm_contact",
+        dim: LimitDim::Force,
+        what: "the largest contact force on an arm link other than the tool",
+    },
 ];
 
 /// The entry of [`LIMITS`] named `name`.

@@ -20,6 +20,20 @@ pub struct Observation {
     pub wrench_sensor: Vector6<f64>,
     /// The same wrench about the sensor origin, in base-frame axes.
     pub wrench_base: Vector6<f64>,
+    /// The largest contact force on a link of the arm the wrist sensor does not measure (any
+    /// link before the sensor: the upper arm, the elbow, the wrist) \[N\], 0 without such
+    /// contact. Skills touch the world with the tool only, so any such force is a collision.
+    ///
+    /// The simulation sums the solver's contact forces per link. A real arm fills it from its
+    /// external-torque estimate (the LWR-IV's joint torque sensors minus the model's torques, as
+    /// KUKA's FRI reports them): the residual `τ_ext − Jᵀ w` that the wrist sensor's wrench `w`
+    /// does not explain comes from contact elsewhere; the most distal joint with a residual above
+    /// the estimate's noise bounds the link (the one after it), and the residual over the lever
+    /// from that joint to the link's far end bounds the force from below.
+    pub arm_contact_n: f64,
+    /// The link [`Observation::arm_contact_n`] acts on, as an index into
+    /// [`crate::robot::Robot::links`]; `None` without such contact (or when a plant cannot tell).
+    pub arm_contact_link: Option<usize>,
 }
 
 impl Observation {
@@ -31,6 +45,8 @@ impl Observation {
             qd: DVector::zeros(dof),
             wrench_sensor: Vector6::zeros(),
             wrench_base: Vector6::zeros(),
+            arm_contact_n: 0.0,
+            arm_contact_link: None,
         }
     }
 }
@@ -190,6 +206,9 @@ impl Plant for KinematicPlant {
         let f_s = rot_t * force;
         let m_s = rot_t * moment_sensor;
         out.wrench_sensor = Vector6::new(f_s.x, f_s.y, f_s.z, m_s.x, m_s.y, m_s.z);
+        // Only the tool meets the scripted environment.
+        out.arm_contact_n = 0.0;
+        out.arm_contact_link = None;
     }
 
     fn apply(&mut self, torques: &[f64]) -> Result<(), PlantError> {

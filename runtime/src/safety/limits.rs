@@ -74,6 +74,9 @@ pub struct Limits {
     pub tracking_error_m: f64,
     /// Largest orientation error about the position-controlled rotation axes \[rad\].
     pub tracking_error_rad: f64,
+    /// Largest contact force on an arm link other than the tool \[N\]
+    /// ([`crate::plant::Observation::arm_contact_n`]).
+    pub arm_contact_n: f64,
     /// Where the tool point may go (base frame); `None` for anywhere.
     pub workspace: Option<Workspace>,
 }
@@ -88,6 +91,15 @@ pub const REDUCED_SPEED_MPS: f64 = 0.25;
 /// A torque counts as saturated at this fraction of the joint's effort limit.
 pub const SATURATION_FRACTION: f64 = 0.99;
 
+/// The default limit on the contact force on an arm link other than the tool \[N\]. Skills
+/// touch the world with the tool only, so this is not a tolerance for pushing but the smallest
+/// force that is clearly a contact: the force that stops pre-positioning (5 N, well above a wrist
+/// sensor's noise). In the simulation the value is noise-free and a link moving at 0.1 m/s into
+/// a 5e4 N/m contact passes it within about a millisecond (0.1 mm of penetration); a real arm's
+/// estimate from its joint torques is noisier (a few newtons at the links for the LWR-IV), which
+/// is what the limit's name (`arm_contact`) is there to loosen.
+pub const ARM_CONTACT_N: f64 = 5.0;
+
 impl Limits {
     /// The default limits for a skill whose learned forces and thresholds peak at
     /// `learned_peak_force_n` and whose learned motions stay inside `workspace`:
@@ -100,6 +112,7 @@ impl Limits {
     ///   for at most 100 ms;
     /// - tracking: 5 cm and 0.35 rad (20°) on position-controlled axes (at the default 2000 N/m
     ///   a 5 cm error is 100 N of push: something the arm did not expect is in the way);
+    /// - arm contact: 5 N on any link other than the tool ([`ARM_CONTACT_N`]);
     /// - workspace: the learned motions' box grown by [`WORKSPACE_MARGIN_M`].
     pub fn for_skill(learned_peak_force_n: f64, workspace: Option<Workspace>) -> Self {
         let peak = if learned_peak_force_n.is_finite() {
@@ -118,14 +131,15 @@ impl Limits {
             torque_saturation_s: 0.1,
             tracking_error_m: 0.05,
             tracking_error_rad: 0.35,
+            arm_contact_n: ARM_CONTACT_N,
             workspace,
         }
     }
 
     /// Sets one limit by its name in the language and on the command line (one of
     /// [`LIMIT_NAMES`]: `force`, `moment`, `speed`, `angular_speed`, `joint_margin`,
-    /// `joint_speed`, `saturation`, `tracking`, `tracking_angle`), in SI units. `inf` switches a
-    /// check off.
+    /// `joint_speed`, `saturation`, `tracking`, `tracking_angle`, `arm_contact`), in SI units.
+    /// `inf` switches a check off.
     pub fn set(&mut self, name: &str, value: f64) -> Result<(), LimitError> {
         if value.is_nan() || value <= 0.0 {
             return Err(LimitError::NotPositive {
@@ -147,9 +161,15 @@ impl Limits {
             "saturation" => &mut self.torque_saturation_s,
             "tracking" => &mut self.tracking_error_m,
             "tracking_angle" => &mut self.tracking_error_rad,
+            "arm_contact" => &mut self.arm_contact_n,
             _ => return Err(LimitError::Unknown { name: name.to_string() }),
         };
-        *slot = value;
+        // `inf` switches a check off; the joint margin is a smallest distance, so off is 0.
+        *slot = if name == "joint_margin" && value.is_infinite() {
+            0.0
+        } else {
+            value
+        };
         Ok(())
     }
 
@@ -233,6 +253,20 @@ mod tests {
     }
 
     #[test]
+    fn inf_switches_every_check_off() {
+        let mut limits = Limits::for_skill(10.0, None);
+        for spec in LIMIT_NAMES {
+            limits
+                .set(spec.name, f64::INFINITY)
+                .unwrap_or_else(|err| panic!("{}: {err}", spec.name));
+        }
+        // The one smallest-distance limit is off at 0, every largest-value limit at inf.
+        assert_eq!(limits.joint_margin, 0.0);
+        assert!(limits.force_n.is_infinite() && limits.tool_speed_mps.is_infinite());
+        assert!(limits.tracking_error_m.is_infinite() && limits.torque_saturation_s.is_infinite());
+    }
+
+    #[test]
     fn limit_table_and_set_agree() {
         // Every name of the table sets exactly one field, each a different one.
         let base = Limits::for_skill(10.0, None);
@@ -252,6 +286,7 @@ mod tests {
                 limits.torque_saturation_s,
                 limits.tracking_error_m,
                 limits.tracking_error_rad,
+                limits.arm_contact_n,
             ];
             let set: Vec<usize> = (0..fields.len()).filter(|&i| fields[i] == 1234.5).collect();
             assert_eq!(set.len(), 1, "`{}` sets {set:?}", spec.name);
@@ -263,7 +298,7 @@ mod tests {
             changed.push(set[0]);
         }
         // Every field is reached by a name of the table (and `set` refuses names outside it).
-        assert_eq!(changed.len(), 9, "every settable field has a name in the table");
+        assert_eq!(changed.len(), 10, "every settable field has a name in the table");
         // Each quantity a reflex names as loosenable is in the table.
         for quantity in [
             Quantity::ContactForce,

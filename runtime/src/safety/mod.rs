@@ -13,7 +13,8 @@
 mod limits;
 
 pub use limits::{
-    LimitError, Limits, Workspace, LIMIT_NAMES, REDUCED_SPEED_MPS, SATURATION_FRACTION, WORKSPACE_MARGIN_M,
+    LimitError, Limits, Workspace, ARM_CONTACT_N, LIMIT_NAMES, REDUCED_SPEED_MPS, SATURATION_FRACTION,
+    WORKSPACE_MARGIN_M,
 };
 
 use nalgebra::UnitQuaternion;
@@ -57,7 +58,8 @@ pub enum Quantity {
     TrackingAngle,
     /// Distance of the tool point outside the workspace box \[m\].
     Workspace,
-    /// A link of the arm touches an object of the scene \[N\].
+    /// The contact force on a link of the arm other than the tool \[N\]: a link touches an
+    /// object of the scene.
     ArmContact,
 }
 
@@ -84,7 +86,7 @@ impl Quantity {
     /// (non-finite numbers and the workspace box cannot be loosened by name).
     pub fn limit_name(self) -> Option<&'static str> {
         match self {
-            Quantity::ContactForce | Quantity::ArmContact => Some("force"),
+            Quantity::ContactForce => Some("force"),
             Quantity::ContactMoment => Some("moment"),
             Quantity::ToolSpeed => Some("speed"),
             Quantity::ToolAngularSpeed => Some("angular_speed"),
@@ -93,6 +95,7 @@ impl Quantity {
             Quantity::TorqueSaturation => Some("saturation"),
             Quantity::TrackingError => Some("tracking"),
             Quantity::TrackingAngle => Some("tracking_angle"),
+            Quantity::ArmContact => Some("arm_contact"),
             Quantity::NonFinite | Quantity::Workspace => None,
         }
     }
@@ -220,6 +223,7 @@ pub struct Supervisor {
     velocity: Vec<f64>,
     effort: Vec<f64>,
     names: Vec<String>,
+    link_names: Vec<String>,
     saturated_s: Vec<f64>,
     stats: SafetyStats,
     data: RobotData,
@@ -237,6 +241,7 @@ impl Supervisor {
             velocity: joints.iter().map(|j| j.velocity).collect(),
             effort: joints.iter().map(|j| j.effort).collect(),
             names: joints.iter().map(|j| format!("joint `{}`", j.name)).collect(),
+            link_names: robot.links().iter().map(|l| format!("link `{}`", l.name)).collect(),
             saturated_s: vec![0.0; joints.len()],
             stats: SafetyStats::default(),
             data: robot.data(),
@@ -333,6 +338,21 @@ impl Supervisor {
             (Quantity::ToolSpeed, speed, limits.tool_speed_mps),
             (Quantity::ToolAngularSpeed, angular, limits.tool_angular_speed_radps),
         ];
+        // A link that has no business touching anything comes first: the contact force at the
+        // tool may well follow from it.
+        if obs.arm_contact_n > limits.arm_contact_n {
+            let link = obs
+                .arm_contact_link
+                .and_then(|idx| self.link_names.get(idx))
+                .map_or("an unknown link", String::as_str);
+            return Err(violation(
+                Quantity::ArmContact,
+                obs.arm_contact_n,
+                limits.arm_contact_n,
+                link,
+                None,
+            ));
+        }
         if let Some((quantity, measured, limit)) = first_above(cartesian) {
             return Err(violation(quantity, measured, limit, "", None));
         }
@@ -392,6 +412,9 @@ fn first_non_finite(obs: &Observation, sensed: &ControlState, cmd: &Command, tor
     }
     if !all(obs.wrench_base.as_slice()) || !all(obs.wrench_sensor.as_slice()) {
         return Some("the force/torque sensor reading");
+    }
+    if !obs.arm_contact_n.is_finite() {
+        return Some("the arm's contact force");
     }
     if !all(sensed.applied.as_slice()) || !all(sensed.twist.as_slice()) {
         return Some("the measured tool wrench or twist");

@@ -184,3 +184,31 @@ fn the_stop_holds_gravity_and_damps_motion() {
     supervisor.stop_torques(&broken, &mut braking);
     assert!(braking.iter().all(|tau| *tau == 0.0));
 }
+
+#[test]
+fn arm_contact_above_its_limit_is_a_reflex_that_names_the_link() {
+    let mut case = quiet();
+    let link = case.robot.link_index("lwr_3_link").expect("an LWR link");
+    // Below the limit (a graze): nothing.
+    case.obs.arm_contact_n = 0.8 * ARM_CONTACT_N;
+    case.obs.arm_contact_link = Some(link);
+    assert_eq!(quantity_of(&case), None);
+    // Above it, and above the tool's force limit too: the arm contact is named first.
+    case.obs.arm_contact_n = 2.0 * ARM_CONTACT_N;
+    case.sensed.applied[2] = 100.0;
+    let mut supervisor = Supervisor::new(&case.robot, limits());
+    let violation = check(&case, &mut supervisor).expect_err("a link touches the scene");
+    assert_eq!(violation.quantity, Quantity::ArmContact);
+    assert_eq!(violation.limit, ARM_CONTACT_N);
+    let text = violation.to_string();
+    assert!(text.contains("link `lwr_3_link`"), "{text}");
+    // The limit has a name, and switching it off lets the tick pass the arm check.
+    let mut loose = limits();
+    loose.set("arm_contact", f64::INFINITY).expect("a named limit");
+    case.sensed.applied[2] = 0.0;
+    let mut supervisor = Supervisor::new(&case.robot, loose);
+    check(&case, &mut supervisor).expect("arm contact switched off");
+    // A non-finite contact force is caught as such.
+    case.obs.arm_contact_n = f64::NAN;
+    assert_eq!(quantity_of(&case), Some(Quantity::NonFinite));
+}

@@ -1,4 +1,5 @@
-//! Benchmarks for issue 3: model FK + tool Jacobian + gravity, and rapier steps pressing on a table.
+//! Benchmarks for issue 3: model FK + tool Jacobian + gravity, and rapier steps pressing on a table,
+//! with every link's colliders and with the tool's alone (what the arm's colliders cost).
 
 use std::hint::black_box;
 use std::path::Path;
@@ -7,7 +8,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix6xX, Vector6};
 use skill_runtime::plant::{Observation, Plant};
 use skill_runtime::robot::{Robot, LWR4_URDF};
-use skill_runtime::sim::{RapierPlant, Scene};
+use skill_runtime::sim::{RapierOptions, RapierPlant, Scene};
 
 fn model(c: &mut Criterion) {
     let robot = Robot::from_urdf_str(LWR4_URDF, None).expect("bundled urdf");
@@ -25,37 +26,66 @@ fn model(c: &mut Criterion) {
     });
 }
 
+/// The bundled URDF without the collision shapes of the links before the flange: the arm as it
+/// was simulated before its links collided with the scene (only the tool does).
+fn tool_colliders_only() -> String {
+    let split = LWR4_URDF
+        .find("<link name=\"lwr_flange\">")
+        .expect("the LWR's flange link");
+    let (arm, tool) = LWR4_URDF.split_at(split);
+    let mut stripped = String::with_capacity(LWR4_URDF.len());
+    let mut rest = arm;
+    while let Some(start) = rest.find("<collision>") {
+        stripped.push_str(&rest[..start]);
+        let end = rest[start..].find("</collision>").expect("closed collision") + start;
+        rest = &rest[end + "</collision>".len()..];
+    }
+    stripped.push_str(rest);
+    stripped.push_str(tool);
+    stripped
+}
+
 fn sim(c: &mut Criterion) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes/table.toml");
     let scene = Scene::from_file(&path).expect("example scene");
-    let mut plant = RapierPlant::from_scene(&scene).expect("scene builds");
-    let robot = plant.robot().clone();
-    let mut data = robot.data();
-    let mut jacobian = Matrix6xX::zeros(7);
-    let mut gravity = [0.0; 7];
-    let mut tau = [0.0; 7];
-    let mut obs = Observation::zeros(7);
-    let damping = [8.0, 8.0, 4.0, 4.0, 1.0, 0.5, 0.1];
-    let wrench = Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0);
-    let mut tick = |plant: &mut RapierPlant| {
-        plant.observe_into(&mut obs);
-        robot.forward_kinematics(&mut data, obs.q.as_slice());
-        robot.tool_jacobian(&data, &mut jacobian);
-        robot.gravity_torques(&mut data, &mut gravity);
-        let push = jacobian.transpose() * wrench;
-        for idx in 0..7 {
-            tau[idx] = gravity[idx] + push[idx] - damping[idx] * obs.qd[idx];
+    let tool_only = Robot::from_urdf_str(&tool_colliders_only(), Some("probe_tip")).expect("stripped urdf");
+    let plants = [
+        (
+            "rapier step pressing on table (controller + sensor)",
+            RapierPlant::from_scene(&scene).expect("scene builds"),
+        ),
+        (
+            "rapier step pressing on table, tool colliders only",
+            RapierPlant::new(tool_only, &scene, RapierOptions::default()).expect("scene builds"),
+        ),
+    ];
+    for (name, mut plant) in plants {
+        let robot = plant.robot().clone();
+        let mut data = robot.data();
+        let mut jacobian = Matrix6xX::zeros(7);
+        let mut gravity = [0.0; 7];
+        let mut tau = [0.0; 7];
+        let mut obs = Observation::zeros(7);
+        let damping = [8.0, 8.0, 4.0, 4.0, 1.0, 0.5, 0.1];
+        let wrench = Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0);
+        let mut tick = |plant: &mut RapierPlant| {
+            plant.observe_into(&mut obs);
+            robot.forward_kinematics(&mut data, obs.q.as_slice());
+            robot.tool_jacobian(&data, &mut jacobian);
+            robot.gravity_torques(&mut data, &mut gravity);
+            let push = jacobian.transpose() * wrench;
+            for idx in 0..7 {
+                tau[idx] = gravity[idx] + push[idx] - damping[idx] * obs.qd[idx];
+            }
+            plant.apply(&tau).expect("7 torques");
+            plant.step(1e-3).expect("finite");
+        };
+        // Get into steady contact first.
+        for _ in 0..500 {
+            tick(&mut plant);
         }
-        plant.apply(&tau).expect("7 torques");
-        plant.step(1e-3).expect("finite");
-    };
-    // Get into steady contact first.
-    for _ in 0..500 {
-        tick(&mut plant);
+        c.bench_function(name, |b| b.iter(|| tick(&mut plant)));
     }
-    c.bench_function("rapier step pressing on table (controller + sensor)", |b| {
-        b.iter(|| tick(&mut plant))
-    });
 }
 
 criterion_group!(benches, model, sim);

@@ -89,6 +89,8 @@ fn malformed_scenes_give_clear_errors_naming_the_file() {
         ("011", "`robot.q0.1`"),
         ("012", "unknown link `nope`"),
         ("013", "`sensor.noise_force_n` = `inf`: noise must be in [0, 100]"),
+        ("014", "`robot.tool_start` = `xyz = [1.5, 0.0, 0.3]"),
+        ("015", "arm link `lwr_3_link` starts"),
     ];
     let files = corpus("scene");
     assert_eq!(files.len(), expected.len());

@@ -1,6 +1,6 @@
 //! Building the rapier world from the robot model and the scene: the arm as a multibody of
-//! revolute joints starting at `q0`, the tool's colliders, and the scene's objects (boxes,
-//! cylinders, spring-loaded buttons).
+//! revolute joints starting at `q0`, the tool's and the arm links' colliders, and the scene's
+//! objects (boxes, cylinders, spring-loaded buttons).
 // `Real` is f32 or f64 depending on the rapier flavour: casts and conversions to it are identities in one.
 #![allow(clippy::unnecessary_cast, clippy::useless_conversion)]
 
@@ -9,7 +9,7 @@ use rapier3d::math::{Pose, Real, Rotation, Vector};
 use rapier3d::prelude::{
     ActiveHooks, CoefficientCombineRule, ColliderBuilder, GenericJointBuilder, Group, InteractionGroups,
     InteractionTestMode, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle, RigidBodyBuilder,
-    RigidBodyHandle,
+    RigidBodyHandle, SharedShape,
 };
 
 use super::convert::{mass_properties, pose_of, pose_of_quat, quat, rpy_pose, vec3, z_to_y};
@@ -40,9 +40,42 @@ const BUTTON_LIMIT_MARGIN: Real = 0.001;
 
 const TOOL_GROUP: Group = Group::GROUP_1;
 const SCENE_GROUP: Group = Group::GROUP_2;
+const ARM_GROUP: Group = Group::GROUP_3;
+
+/// The `user_data` of an arm link's collider: the link's index in [`crate::robot::Robot::links`]
+/// plus one (0, every other collider's, means "not an arm link").
+fn arm_link_tag(link_idx: usize) -> u128 {
+    link_idx as u128 + 1
+}
+
+/// The arm link (index into [`crate::robot::Robot::links`]) a collider's `user_data` tags, if any.
+pub(super) fn arm_link_of(user_data: u128) -> Option<usize> {
+    user_data.checked_sub(1).and_then(|idx| usize::try_from(idx).ok())
+}
+
+/// A URDF collision shape as rapier's, and where it sits on its body (rapier's cylinders run
+/// along y, URDF's along z).
+fn link_shape(shape: &Shape, shape_in_body: Pose) -> (Pose, SharedShape) {
+    match *shape {
+        Shape::Sphere { radius } => (shape_in_body, SharedShape::ball(radius as Real)),
+        Shape::Cuboid { size } => (
+            shape_in_body,
+            SharedShape::cuboid(size.x as Real / 2.0, size.y as Real / 2.0, size.z as Real / 2.0),
+        ),
+        Shape::Cylinder { radius, length } => (
+            shape_in_body * z_to_y(),
+            SharedShape::cylinder(length as Real / 2.0, radius as Real),
+        ),
+        Shape::Capsule { radius, length } => (
+            shape_in_body,
+            SharedShape::capsule_z(length as Real / 2.0, radius as Real),
+        ),
+    }
+}
 
 impl RapierPlant {
-    /// Adds the arm (a multibody from a fixed root), moved to `q0`, and the tool's colliders.
+    /// Adds the arm (a multibody from a fixed root), moved to `q0`, the tool's colliders and the
+    /// arm links' colliders.
     pub(super) fn build_arm(&mut self, q0: &[f64], sensor_link: usize, options: RapierOptions) {
         let robot = &self.robot;
         let mut data = robot.data();
@@ -76,42 +109,59 @@ impl RapierPlant {
             self.joints.push(joint_handle);
             parent = handle;
         }
-        // Tool colliders: every link from the sensor link on, massless (the mass is in the body).
-        for link in &robot.links()[sensor_link..] {
+        // Colliders: the tool's (every link from the sensor link on: the wrist sensor measures
+        // their contacts) and the arm's (the links before it on moving bodies), all massless
+        // (the mass is in the body). Links fixed to the base get none: the base cannot move
+        // into anything, and its contact with fixed objects would carry no force.
+        let material = |builder: ColliderBuilder| {
+            builder
+                .density(0.0)
+                .friction(1.0e3)
+                .friction_combine_rule(CoefficientCombineRule::Min)
+                .restitution(0.0)
+        };
+        for (link_idx, link) in robot.links().iter().enumerate() {
             let Some(body) = link.body else { continue };
-            for collision in &link.collisions {
-                let shape_in_body = pose_of(&link.link_in_body) * pose_of_quat(&collision.shape_in_link);
-                let (builder, shape_pose) = match collision.shape {
-                    Shape::Sphere { radius } => (ColliderBuilder::ball(radius as Real), shape_in_body),
-                    Shape::Cuboid { size } => (
-                        ColliderBuilder::cuboid(size.x as Real / 2.0, size.y as Real / 2.0, size.z as Real / 2.0),
-                        shape_in_body,
-                    ),
-                    Shape::Cylinder { radius, length } => (
-                        ColliderBuilder::cylinder(length as Real / 2.0, radius as Real),
-                        shape_in_body * z_to_y(),
-                    ),
-                    Shape::Capsule { radius, length } => (
-                        ColliderBuilder::capsule_z(length as Real / 2.0, radius as Real),
-                        shape_in_body,
-                    ),
-                };
-                let collider = builder
-                    .position(shape_pose)
-                    .density(0.0)
-                    .friction(1.0e3)
-                    .friction_combine_rule(CoefficientCombineRule::Min)
-                    .restitution(0.0)
-                    .collision_groups(InteractionGroups::new(
-                        TOOL_GROUP,
-                        SCENE_GROUP,
-                        InteractionTestMode::And,
-                    ));
-                let handle = self
-                    .colliders
-                    .insert_with_parent(collider, self.links[body], &mut self.bodies);
-                self.tool_colliders.push(handle);
+            let shapes: Vec<(Pose, SharedShape)> = link
+                .collisions
+                .iter()
+                .map(|collision| {
+                    let shape_in_body = pose_of(&link.link_in_body) * pose_of_quat(&collision.shape_in_link);
+                    link_shape(&collision.shape, shape_in_body)
+                })
+                .collect();
+            if link_idx >= sensor_link {
+                // One collider per shape, as the contact wrench has always been read.
+                for (pose, shape) in shapes {
+                    let collider = material(ColliderBuilder::new(shape).position(pose)).collision_groups(
+                        InteractionGroups::new(TOOL_GROUP, SCENE_GROUP, InteractionTestMode::And),
+                    );
+                    let handle = self
+                        .colliders
+                        .insert_with_parent(collider, self.links[body], &mut self.bodies);
+                    self.tool_colliders.push(handle);
+                }
+                continue;
             }
+            // One collider per arm link (a compound of its shapes): a step updates every moving
+            // collider, so three shapes on one collider cost a third. Arm links meet the scene
+            // only: never each other nor the tool (adjacent links overlap at every joint), and
+            // their contacts are not the sensor's.
+            let builder = match shapes.len() {
+                0 => continue,
+                1 => {
+                    let (pose, shape) = shapes.into_iter().next().expect("one shape");
+                    ColliderBuilder::new(shape).position(pose)
+                }
+                _ => ColliderBuilder::compound(shapes),
+            };
+            let collider = material(builder)
+                .collision_groups(InteractionGroups::new(ARM_GROUP, SCENE_GROUP, InteractionTestMode::And))
+                .user_data(arm_link_tag(link_idx));
+            let handle = self
+                .colliders
+                .insert_with_parent(collider, self.links[body], &mut self.bodies);
+            self.arm_colliders.push((handle, link_idx));
         }
         if let Some((multibody, _)) = self.multibody_joints.get_mut(self.joints[0]) {
             // Pitfall: a fresh multibody reports a free root until its kinematics run once.
@@ -126,7 +176,7 @@ impl RapierPlant {
 
     /// Adds the scene's objects.
     pub(super) fn build_objects(&mut self, scene: &Scene) {
-        let groups = InteractionGroups::new(SCENE_GROUP, TOOL_GROUP, InteractionTestMode::And);
+        let groups = InteractionGroups::new(SCENE_GROUP, TOOL_GROUP | ARM_GROUP, InteractionTestMode::And);
         for (name, object) in &scene.spec().objects {
             let pose = rpy_pose(object.xyz, object.rpy);
             let friction = object.friction as Real;

@@ -1,11 +1,13 @@
 //! Reading contacts: the contact wrench on the tool colliders from rapier's solver impulses,
-//! about the sensor origin, and what the wrist sensor makes of it.
+//! about the sensor origin, and what the wrist sensor makes of it; and the contact forces on the
+//! arm's other links, which the sensor does not see.
 // `Real` is f32 or f64 depending on the rapier flavour: casts and conversions to it are identities in one.
 #![allow(clippy::unnecessary_cast, clippy::useless_conversion)]
 
 use nalgebra::{Rotation3, Vector3, Vector6};
 use rapier3d::prelude::PairContacts;
 
+use super::build::arm_link_of;
 use super::convert::{from_vec3, iso_of};
 use super::rapier_plant::RapierPlant;
 
@@ -53,6 +55,52 @@ impl RapierPlant {
         Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
     }
 
+    /// Sums the contact forces on each arm link that is not the tool (base axes) into
+    /// `arm_forces`, and keeps the largest magnitude and its link. Reads the pairs of the scene's
+    /// objects (a handful) rather than those of the arm's colliders (about twenty).
+    fn sense_arm_contacts(&mut self) {
+        self.arm_forces.iter_mut().for_each(|force| *force = Vector3::zeros());
+        let inv_dt = 1.0 / f64::from(self.params.dt);
+        for (object, _) in &self.object_colliders {
+            for pair in self.narrow_phase.contact_pairs_with(*object) {
+                let PairContacts::Rigid(rigid) = &pair.contacts else {
+                    continue;
+                };
+                let object_is_first = pair.collider1 == *object;
+                let arm = if object_is_first {
+                    pair.collider2
+                } else {
+                    pair.collider1
+                };
+                let Some(link) = self.colliders.get(arm).and_then(|c| arm_link_of(c.user_data)) else {
+                    continue;
+                };
+                let mut on_arm = Vector3::zeros();
+                for manifold in rigid.solver_manifolds() {
+                    let normal = from_vec3(manifold.data.normal);
+                    for point in &manifold.points {
+                        // As for the tool: the push on the first collider is −n λ (plus friction).
+                        let on_first = -(normal * f64::from(point.data.impulse)
+                            + from_vec3(point.data.warmstart_tangent_world))
+                            * inv_dt;
+                        on_arm += if object_is_first { -on_first } else { on_first };
+                    }
+                }
+                if let Some(slot) = self.arm_forces.get_mut(link) {
+                    *slot += on_arm;
+                }
+            }
+        }
+        let (mut largest, mut which) = (0.0, None);
+        for (link, force) in self.arm_forces.iter().enumerate() {
+            let magnitude = force.norm();
+            if magnitude > largest {
+                (largest, which) = (magnitude, Some(link));
+            }
+        }
+        self.arm_contact = (largest, which);
+    }
+
     /// The sensor frame's rotation in the base frame.
     fn sensor_rotation(&self) -> Rotation3<f64> {
         self.bodies
@@ -62,8 +110,10 @@ impl RapierPlant {
     }
 
     /// After a step: gathers the contact wrench and passes it through the wrist sensor
-    /// (sensor axes), storing the ideal wrench and the sensor's reading in sensor and base axes.
+    /// (sensor axes), storing the ideal wrench and the sensor's reading in sensor and base axes;
+    /// gathers the arm links' contact forces.
     pub(super) fn sense_contacts(&mut self, dt: f64) {
+        self.sense_arm_contacts();
         let ideal = self.contact_wrench();
         self.ideal_wrench_base = ideal;
         let rot_t = self.sensor_rotation().inverse();

@@ -11,5 +11,5 @@ mod sensor;
 
 pub use convert::SIM_F64;
 pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError};
-pub use scene::{ObjectKind, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec};
+pub use scene::{ObjectKind, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec, ToolStart};
 pub use sensor::{SensorConfig, WristSensor};

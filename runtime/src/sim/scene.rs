@@ -4,9 +4,11 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use serde::Deserialize;
 
 use super::SensorConfig;
+use crate::robot::Robot;
 
 /// Why a scene file could not be read, parsed or changed. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
@@ -66,9 +68,37 @@ pub struct RobotSpec {
     /// The link the wrist sensor measures at (default `lwr_flange`).
     #[serde(default = "default_sensor_link")]
     pub sensor: String,
-    /// Initial joint positions, rad (default: all zero).
+    /// Initial joint positions, rad (default: all zero). With [`RobotSpec::tool_start`] they are
+    /// only the seed of its inverse kinematics.
     #[serde(default)]
     pub q0: Option<Vec<f64>>,
+    /// The tool link's start pose instead of joint positions: `tool_start = { xyz = [x, y, z],
+    /// rpy = [roll, pitch, yaw] }` (m, rad; the world frame, which is the robot's base frame;
+    /// both keys required). The start configuration is found by inverse kinematics, from `q0`
+    /// when given, else from [`crate::robot::Robot::inverse_kinematics_default_seed`]'s seeds; an
+    /// unreachable pose is an error naming `robot.tool_start`.
+    #[serde(default)]
+    pub tool_start: Option<ToolStart>,
+}
+
+/// `robot.tool_start`: where the tool link starts, in the world (= robot base) frame.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolStart {
+    /// Position, m.
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw, rad (URDF convention, as for objects).
+    pub rpy: [f64; 3],
+}
+
+impl ToolStart {
+    /// The pose as an isometry.
+    pub fn pose(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(self.xyz[0], self.xyz[1], self.xyz[2]),
+            UnitQuaternion::from_euler_angles(self.rpy[0], self.rpy[1], self.rpy[2]),
+        )
+    }
 }
 
 fn default_sensor_link() -> String {
@@ -247,6 +277,50 @@ impl Scene {
     /// The robot URDF's path, resolved against the scene file's folder.
     pub fn urdf_path(&self) -> PathBuf {
         self.base_dir.join(&self.spec.robot.urdf)
+    }
+
+    /// The joint positions the robot starts at \[rad\]: found by inverse kinematics for
+    /// `robot.tool_start` (seeded from `robot.q0` when the scene gives it too), else `robot.q0`,
+    /// else all zero. The joint count and limits of a `q0` are checked when the simulation is
+    /// built; a `tool_start` solution lies inside the limits.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `robot.tool_start` when the pose is out of reach (the
+    /// message says how close the solver came), or `robot.q0` when a seed has the wrong length.
+    pub fn start_configuration(&self, robot: &Robot) -> Result<Vec<f64>, SceneError> {
+        let spec = &self.spec.robot;
+        let Some(tool_start) = &spec.tool_start else {
+            return Ok(spec.q0.clone().unwrap_or_else(|| vec![0.0; robot.dof()]));
+        };
+        let invalid = |key: &str, value: String, reason: String| SceneError::Invalid {
+            file: self.file.clone(),
+            key: key.to_owned(),
+            value,
+            reason,
+        };
+        let target = tool_start.pose();
+        let solved = match &spec.q0 {
+            Some(seed) if seed.len() != robot.dof() => {
+                return Err(invalid(
+                    "robot.q0",
+                    format!("{seed:?}"),
+                    format!(
+                        "robot `{}` has {} joints (q0 seeds `robot.tool_start`)",
+                        robot.name(),
+                        robot.dof()
+                    ),
+                ))
+            }
+            Some(seed) => robot.inverse_kinematics(&target, seed),
+            None => robot.inverse_kinematics_default_seed(&target),
+        };
+        solved.map_err(|err| {
+            invalid(
+                "robot.tool_start",
+                format!("xyz = {:?}, rpy = {:?}", tool_start.xyz, tool_start.rpy),
+                err.to_string(),
+            )
+        })
     }
 
     /// Changes one value, as `skillc … --set key=value` does, and re-validates the scene.
@@ -449,6 +523,15 @@ fn validate(spec: &SceneSpec, file: &str) -> Result<(), SceneError> {
     if let Some(q0) = &spec.robot.q0 {
         if q0.iter().any(|q| !q.is_finite()) {
             return Err(invalid("robot.q0".into(), format!("{q0:?}"), "must be finite"));
+        }
+    }
+    if let Some(start) = &spec.robot.tool_start {
+        if start.xyz.iter().chain(&start.rpy).any(|v| !v.is_finite()) {
+            return Err(invalid(
+                "robot.tool_start".into(),
+                format!("xyz = {:?}, rpy = {:?}", start.xyz, start.rpy),
+                "must be finite",
+            ));
         }
     }
     for (name, object) in &spec.objects {

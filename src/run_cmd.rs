@@ -51,7 +51,7 @@ pub struct RunArgs {
     pub speed: f64,
     /// Tighten or loosen a safety limit, in SI units, e.g. `--limit force=60` (N),
     /// `--limit speed=0.1` (m/s); `inf` switches a check off. Names: force, moment, speed,
-    /// angular_speed, joint_margin, joint_speed, saturation, tracking, tracking_angle (repeatable).
+    /// angular_speed, joint_margin, joint_speed, saturation, tracking, tracking_angle, arm_contact (repeatable).
     #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = parse_limit)]
     pub limits: Vec<(String, f64)>,
 }

@@ -223,7 +223,9 @@ const MAX_LIFT_M: f64 = 0.5;
 /// the tool inside them. `draw.start_raised_m` is filled in.
 pub fn scene_sets(scene: &Scene, robot: &Robot, draw: &mut Draw, seed: u64) -> Result<Vec<String>, String> {
     let spec = scene.spec();
-    let q0 = spec.robot.q0.clone().unwrap_or_else(|| vec![0.0; robot.dof()]);
+    let q0 = scene
+        .start_configuration(robot)
+        .map_err(|err| crate::load::error_chain(&err))?;
     let (start, _, _) = robot.evaluate(&q0);
     let pivot = start.translation.vector;
     let axis_angle = draw.tilt_axis_deg.to_radians();
@@ -272,13 +274,19 @@ pub fn scene_sets(scene: &Scene, robot: &Robot, draw: &mut Draw, seed: u64) -> R
         }
         lift += needed;
         let target = Translation3::new(0.0, 0.0, lift) * start;
-        let q = robot.inverse_kinematics(&target, &q0).map_err(|err| err.to_string())?;
-        let text = q.iter().map(|v| format!("{v:.9}")).collect::<Vec<_>>().join(", ");
-        moved
-            .set("robot.q0", &format!("[{text}]"))
-            .map_err(|err| crate::load::error_chain(&err))?;
-        sets.retain(|set| !set.starts_with("robot.q0="));
-        sets.push(format!("robot.q0=[{text}]"));
+        // A scene that gives the tool's start pose gets a higher pose; one that gives joint
+        // angles gets the joint angles of the higher pose.
+        let (key, value) = if spec.robot.tool_start.is_some() {
+            let p = target.translation.vector;
+            ("robot.tool_start.xyz", format!("[{:.9}, {:.9}, {:.9}]", p.x, p.y, p.z))
+        } else {
+            let q = robot.inverse_kinematics(&target, &q0).map_err(|err| err.to_string())?;
+            let text = q.iter().map(|v| format!("{v:.9}")).collect::<Vec<_>>().join(", ");
+            ("robot.q0", format!("[{text}]"))
+        };
+        moved.set(key, &value).map_err(|err| crate::load::error_chain(&err))?;
+        sets.retain(|set| !set.starts_with(&format!("{key}=")));
+        sets.push(format!("{key}={value}"));
     }
     draw.start_raised_m = lift;
     Ok(sets)

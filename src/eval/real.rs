@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use skill_runtime::demo::{negate_wrench, read_csv, stores_applied_force, ReadOptions};
+use skill_runtime::demo::{read_csv, ReadOptions};
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode};
 use skill_runtime::skill::{learn_skill, LearnOptions, LearnedForce, LearnedFrame};
 
@@ -39,8 +39,8 @@ pub struct RealResult {
     pub force_rms_rel: Option<f64>,
     /// Its share of the contact phase in contact.
     pub contact_share: Option<f64>,
-    /// Whether the file's forces were negated to skillc's convention.
-    pub sign_flipped: bool,
+    /// How learning read the file's wrench: its frame, bias and sign.
+    pub wrench: Option<String>,
     /// Whether the reproduction started from the file's joint angles.
     pub start_from_demo: bool,
 }
@@ -107,7 +107,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         reproduction: None,
         force_rms_rel: None,
         contact_share: None,
-        sign_flipped: false,
+        wrench: None,
         start_from_demo: false,
     };
     let loaded = match read_csv(path, &ReadOptions { min_samples: 30 }) {
@@ -123,14 +123,8 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         result.skipped = Some("the force signal is frozen (the sensor did not stream): skipped".to_string());
         return result;
     }
-    let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
-    let mut demo = demo;
-    if stores_applied_force(&demo) {
-        // skillc's convention is the force the environment exerts on the tool (docs/method.md §1).
-        negate_wrench(&mut demo);
-        warnings.push("the force points into the surface: the file stores the force the robot applies; negated".into());
-        result.sign_flipped = true;
-    }
+    // The learner settles the wrench's frame, bias and sign itself (docs/method.md §1).
+    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
     let learned = match learn_skill(skill, &demo, &warnings, &LearnOptions::default()) {
         Ok(learned) => learned,
         Err(err) => {
@@ -138,6 +132,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
             return result;
         }
     };
+    result.wrench = learned.quality.wrench.as_ref().map(ToString::to_string);
     let t0 = demo.t_s[0];
     result.found_boundaries_s = learned.segments.iter().skip(1).map(|s| s.start_s - t0).collect();
     if let Some(labels) = label_boundaries(dir, &file) {

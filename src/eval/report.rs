@@ -200,9 +200,8 @@ pub(super) fn real_table(results: &[RealResult]) -> String {
         let labels: Vec<String> = r.label_boundaries_s.iter().map(|e| format!("{e:.2}")).collect();
         let _ = writeln!(
             out,
-            "  {:<14} {}boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; reproduction: {} (force RMS {}%, contact {}%)",
+            "  {:<14} boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; reproduction: {} (force RMS {}%, contact {}%)",
             r.file,
-            if r.sign_flipped { "(force negated) " } else { "" },
             found.join(", "),
             labels.join(", "),
             errors.join(", "),
@@ -211,6 +210,9 @@ pub(super) fn real_table(results: &[RealResult]) -> String {
             percent(r.force_rms_rel),
             percent(r.contact_share)
         );
+        if let Some(wrench) = &r.wrench {
+            let _ = writeln!(out, "  {:<14} {wrench}", "");
+        }
     }
     out
 }

@@ -4,6 +4,7 @@
 
 pub mod atomic;
 pub mod cli;
+pub mod defaults;
 pub mod eval;
 pub mod frontend;
 pub mod learn_cmd;

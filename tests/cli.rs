@@ -651,3 +651,27 @@ fn a_sweep_split_into_shares_and_merged_equals_the_whole_sweep() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn eval_runs_on_its_built_in_defaults_from_any_folder() {
+    let dir = temp_dir("anywhere");
+    let cache = dir.join("cache");
+    let out = Command::new(env!("CARGO_BIN_EXE_skillc"))
+        .args(["eval", "--skill", "touch", "--no-replay", "--out", "report"])
+        .current_dir(&dir)
+        .env("XDG_CACHE_HOME", &cache)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("skillc runs");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.join("report/summary.json").is_file());
+    let defaults = cache.join(format!("skillc/{}/defaults", env!("CARGO_PKG_VERSION")));
+    for file in [
+        "stdlib-skills/touch.skill",
+        "examples/demos/touch.csv",
+        "examples/robots/lwr4.urdf",
+    ] {
+        assert!(defaults.join(file).is_file(), "{file}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

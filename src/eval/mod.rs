@@ -283,7 +283,7 @@ fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
         None => (
             DEFAULT_TRIALS.to_string(),
             DEFAULT_TRIALS_PATH.to_string(),
-            PathBuf::from("examples/eval"),
+            crate::defaults::root().map_err(Failure::Usage)?.join("examples/eval"),
         ),
     };
     let trials: TrialsFile =
@@ -557,9 +557,11 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     crate::out::print(&format!("{table}{} trials in {elapsed:.1} s\n", outcomes.len()))?;
     let real = match &args.real {
         Some(dir) => {
-            let (_, slide) = load_skill(Path::new("stdlib-skills/slide.skill"), None)?;
+            let root = crate::defaults::root().map_err(Failure::Usage)?;
+            let (_, slide) = load_skill(&root.join("stdlib-skills/slide.skill"), None)?;
+            let table = root.join("examples/scenes/table.toml");
             let results = pool
-                .install(|| real::evaluate(dir, &slide, Path::new("examples/scenes/table.toml")))
+                .install(|| real::evaluate(dir, &slide, &table))
                 .map_err(Failure::Usage)?;
             crate::out::print(&report::real_table(&results))?;
             results

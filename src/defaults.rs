@@ -1,0 +1,170 @@
+//! The built-in defaults `skillc eval` runs on from any folder: the standard skills, scenes,
+//! robot and trials are compiled into the binary and the demonstrations are generated, written
+//! once into the user's cache folder (`$XDG_CACHE_HOME/skillc/VERSION`, else
+//! `~/.cache/skillc/VERSION`, else under the temporary directory).
+//!
+//! From the repository root (where `examples/eval/default.toml` is) the files there are used,
+//! edits included; anywhere else (after `cargo install --locked --path .`) the built-in copies.
+
+use std::path::{Path, PathBuf};
+
+use skill_runtime::demogen::{generate, to_csv, StdSkill};
+
+use crate::atomic;
+
+/// Every built-in file, by its path relative to the repository root.
+const FILES: &[(&str, &str)] = &[
+    (
+        "examples/eval/default.toml",
+        include_str!("../examples/eval/default.toml"),
+    ),
+    (
+        "stdlib-skills/touch.skill",
+        include_str!("../stdlib-skills/touch.skill"),
+    ),
+    (
+        "stdlib-skills/press.skill",
+        include_str!("../stdlib-skills/press.skill"),
+    ),
+    (
+        "stdlib-skills/slide.skill",
+        include_str!("../stdlib-skills/slide.skill"),
+    ),
+    (
+        "stdlib-skills/contour.skill",
+        include_str!("../stdlib-skills/contour.skill"),
+    ),
+    (
+        "examples/scenes/table.toml",
+        include_str!("../examples/scenes/table.toml"),
+    ),
+    (
+        "examples/scenes/button.toml",
+        include_str!("../examples/scenes/button.toml"),
+    ),
+    (
+        "examples/scenes/cylinder.toml",
+        include_str!("../examples/scenes/cylinder.toml"),
+    ),
+    (
+        "examples/scenes/workcell.toml",
+        include_str!("../examples/scenes/workcell.toml"),
+    ),
+    (
+        "examples/robots/lwr4.urdf",
+        include_str!("../examples/robots/lwr4.urdf"),
+    ),
+];
+
+/// The file whose presence marks a complete folder of defaults.
+const COMPLETE: &str = ".complete";
+
+/// The root the default trials' paths are relative to: the current folder when it is the
+/// repository's root, else a folder of built-in copies (written on first use).
+pub fn root() -> Result<PathBuf, String> {
+    if Path::new("examples/eval/default.toml").is_file() && Path::new("stdlib-skills").is_dir() {
+        return Ok(PathBuf::new());
+    }
+    let dir = cache_dir();
+    if dir.join(COMPLETE).is_file() && FILES.iter().all(|(path, text)| same(&dir.join(path), text)) {
+        return Ok(dir);
+    }
+    write_all(&dir).map_err(|err| format!("cannot write the built-in defaults to `{}`: {err}", dir.display()))?;
+    Ok(dir)
+}
+
+/// Where the built-in copies go: the user's own cache (not a folder every user of the machine
+/// can write into), else the temporary directory.
+fn cache_dir() -> PathBuf {
+    let version = format!("skillc/{}/defaults", env!("CARGO_PKG_VERSION"));
+    let nonempty = |name: &str| {
+        std::env::var_os(name)
+            .filter(|value| !value.is_empty())
+            .map(PathBuf::from)
+    };
+    if let Some(cache) = nonempty("XDG_CACHE_HOME") {
+        return cache.join(version);
+    }
+    if let Some(home) = nonempty("HOME") {
+        return home.join(".cache").join(version);
+    }
+    std::env::temp_dir().join(version)
+}
+
+/// Whether `path` holds exactly `text` (a copy from another version is rewritten).
+fn same(path: &Path, text: &str) -> bool {
+    std::fs::read_to_string(path).is_ok_and(|existing| existing == text)
+}
+
+/// Writes every built-in file and the generated demonstrations into `dir`, each atomically,
+/// then the completion mark: a folder another process is writing at the same time ends with
+/// the same bytes.
+fn write_all(dir: &Path) -> std::io::Result<()> {
+    for (path, text) in FILES {
+        let target = dir.join(path);
+        if let Some(parent) = target.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        atomic::write(&target, text.as_bytes())?;
+    }
+    let demos = dir.join("examples/demos");
+    std::fs::create_dir_all(&demos)?;
+    for skill in StdSkill::ALL {
+        let demo = generate(skill, skill.default_seed());
+        atomic::write(&demos.join(format!("{}.csv", skill.name())), to_csv(&demo).as_bytes())?;
+    }
+    atomic::write(&dir.join(COMPLETE), b"")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The built-in copies are the repository's files: a stale `include_str!` cannot happen,
+    /// but a file the defaults need and the list lacks would only fail outside the repository.
+    #[test]
+    fn the_defaults_hold_every_file_the_default_trials_name() {
+        let trials: toml::Table = FILES[0].1.parse().expect("default trials");
+        let skills = trials["skill"].as_array().expect("skills");
+        for skill in skills {
+            for key in ["file", "scene"] {
+                let relative = skill[key].as_str().expect("path");
+                let path = Path::new("examples/eval").join(relative);
+                let normal: PathBuf = path.components().fold(PathBuf::new(), |mut acc, c| {
+                    match c {
+                        std::path::Component::ParentDir => {
+                            acc.pop();
+                        }
+                        other => acc.push(other),
+                    }
+                    acc
+                });
+                let name = normal.to_string_lossy().replace('\\', "/");
+                assert!(FILES.iter().any(|(p, _)| *p == name), "`{name}` is not built in");
+            }
+            let demo = skill["demo"].as_str().expect("demo");
+            let stem = Path::new(demo).file_stem().and_then(|s| s.to_str()).expect("stem");
+            assert!(
+                StdSkill::ALL.iter().any(|s| s.name() == stem),
+                "demo `{demo}` is not generated"
+            );
+        }
+    }
+
+    #[test]
+    fn written_defaults_are_complete_and_match_the_repository() {
+        let dir = std::env::temp_dir().join(format!("skillc-defaults-test-{}", std::process::id()));
+        write_all(&dir).expect("writes");
+        assert!(dir.join(COMPLETE).is_file());
+        for (path, text) in FILES {
+            assert!(same(&dir.join(path), text), "{path}");
+            assert_eq!(std::fs::read_to_string(path).expect("repository file"), *text, "{path}");
+        }
+        for name in ["touch", "press", "slide", "contour"] {
+            let generated = std::fs::read_to_string(dir.join(format!("examples/demos/{name}.csv"))).expect("demo");
+            let shipped = std::fs::read_to_string(format!("examples/demos/{name}.csv")).expect("shipped demo");
+            assert_eq!(generated, shipped, "{name}.csv");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

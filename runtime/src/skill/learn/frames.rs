@@ -190,13 +190,7 @@ fn steady_friction(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>])
     let smoothed = smooth_points(position, smoothing_window(t));
     let direction: Vec<Option<Vector3<f64>>> = (0..n)
         .map(|k| {
-            let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
-            let dt = t[b] - t[a];
-            let velocity = if dt > 0.0 {
-                (smoothed[b] - smoothed[a]) / dt
-            } else {
-                Vector3::zeros()
-            };
+            let velocity = central_velocity(t, &smoothed, k);
             (velocity.norm() >= 0.005 && force[k].norm() >= CONTACT_N).then(|| velocity.normalize())
         })
         .collect();
@@ -227,6 +221,19 @@ fn steady_friction(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>])
     (friction, free)
 }
 
+/// The velocity at sample `k` by central differences of `points` (one-sided at the ends; zero
+/// where the time does not advance).
+fn central_velocity(t: &[f64], points: &[Vector3<f64>], k: usize) -> Vector3<f64> {
+    let n = points.len();
+    let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
+    let dt = t[b] - t[a];
+    if dt > 0.0 {
+        (points[b] - points[a]) / dt
+    } else {
+        Vector3::zeros()
+    }
+}
+
 /// The measured forces without their component along the direction of motion.
 ///
 /// While sliding, friction tilts the contact force against the motion by up to atan(µ) (17° at
@@ -240,13 +247,7 @@ fn without_friction(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>]
     let smoothed = smooth_points(position, window);
     (0..n)
         .map(|k| {
-            let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
-            let dt = t[b] - t[a];
-            let velocity = if dt > 0.0 {
-                (smoothed[b] - smoothed[a]) / dt
-            } else {
-                Vector3::zeros()
-            };
+            let velocity = central_velocity(t, &smoothed, k);
             let speed = velocity.norm();
             if speed < 0.005 {
                 force[k]

@@ -355,13 +355,21 @@ fn every_snapshot_belongs_to_a_corpus_stdlib_or_example_file() {
     }
 }
 
-#[test]
-fn formatting_prints_limits_approaches_and_step_limits() {
-    let text = "skill s { learn { motion p = dmp(segment 1) threshold t = 2 N }\nlimits { /// Why.\n force: 40 N, speed : 100 mm/s tracking: inf }\nstate a { move p approach within 5 cm at 10 mm/s on force(tool.z) >= t -> d on timeout 5 s -> d }\n terminal d: success }\ntask k { step x = s(demo: \"d.csv\", limits: {force: 30 N speed: 5 cm/s}) }\n";
+/// `text` parses without a problem, formats to exactly `expected`, and that compiles cleanly.
+fn formats_to(text: &str, expected: &str) -> skill_compiler::Compilation {
     let source = skill_compiler::SourceFile::new("f.skill", text);
     let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
     assert!(diags.is_empty(), "{diags:?}");
     let formatted = skill_compiler::fmt::format(&source, &ast);
+    assert_eq!(formatted, expected);
+    let compiled = skill_compiler::compile_str("f.skill", &formatted);
+    assert!(compiled.diags.is_empty(), "{:?}", compiled.diags);
+    compiled
+}
+
+#[test]
+fn formatting_prints_limits_approaches_and_step_limits() {
+    let text = "skill s { learn { motion p = dmp(segment 1) threshold t = 2 N }\nlimits { /// Why.\n force: 40 N, speed : 100 mm/s tracking: inf }\nstate a { move p approach within 5 cm at 10 mm/s on force(tool.z) >= t -> d on timeout 5 s -> d }\n terminal d: success }\ntask k { step x = s(demo: \"d.csv\", limits: {force: 30 N speed: 5 cm/s}) }\n";
     let expected = r#"skill s {
     learn {
         motion p = dmp(segment 1)
@@ -389,18 +397,12 @@ task k {
     step x = s(demo: "d.csv", limits: { force: 30 N, speed: 5 cm/s })
 }
 "#;
-    assert_eq!(formatted, expected);
-    let compiled = skill_compiler::compile_str("f.skill", &formatted);
-    assert!(compiled.diags.is_empty(), "{:?}", compiled.diags);
+    formats_to(text, expected);
 }
 
 #[test]
 fn formatting_prints_lift_offs_and_held_guards_with_the_fewest_parentheses() {
     let text = "skill s { learn { segments = max_force frame c = force_aligned(at: end(segment 1)) motion p = dmp(segment 1) motion q = dmp(segment 2) threshold t = 2 N }\nstate a { move p on force(c.z)>=t for 20 ms -> b on ( motion_done and force(c.z) < t ) for 50 ms or timeout 5 s -> d }\nstate b { move q lift off 2 cm at 10 mm/s on (not (motion_done for 10 ms)) for 100 ms -> e on timeout 5 s -> d }\nstate e { move q\n lift  off 0 mm on not force(c.z) >= t for 1 s -> d on timeout 5 s -> d }\n terminal d: success }\n";
-    let source = skill_compiler::SourceFile::new("f.skill", text);
-    let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
-    assert!(diags.is_empty(), "{diags:?}");
-    let formatted = skill_compiler::fmt::format(&source, &ast);
     let expected = r#"skill s {
     learn {
         segments = max_force
@@ -433,9 +435,7 @@ fn formatting_prints_lift_offs_and_held_guards_with_the_fewest_parentheses() {
     terminal d: success
 }
 "#;
-    assert_eq!(formatted, expected);
-    let compiled = skill_compiler::compile_str("f.skill", &formatted);
-    assert!(compiled.diags.is_empty(), "{:?}", compiled.diags);
+    let compiled = formats_to(text, expected);
     let skill = &compiled.program.expect("compiles").skills[0];
     // `for` binds tighter than `or` and looser than `not`.
     let guard = |index: usize| &skill.transitions[index].guard;

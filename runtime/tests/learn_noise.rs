@@ -7,16 +7,9 @@ use skill_runtime::demo::Demo;
 use skill_runtime::demogen::{generate, StdSkill};
 use skill_runtime::rng::SplitMix64;
 use skill_runtime::skill::{learn_skill, LearnError, LearnOptions, Learned};
+use support::span;
 
-fn span() -> ir::SourceSpan {
-    ir::SourceSpan {
-        file: "test.skill".into(),
-        line: 1,
-        column: 1,
-        start: 0,
-        end: 0,
-    }
-}
+mod support;
 
 /// A skill that splits at the force peak and learns a motion on each side.
 fn two_motions() -> ir::Skill {

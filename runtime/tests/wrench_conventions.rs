@@ -9,6 +9,9 @@ use skill_runtime::demo::{
 };
 use skill_runtime::rng::SplitMix64;
 use skill_runtime::skill::{learn_skill, LearnOptions, Learned, LearnedForce};
+use support::span;
+
+mod support;
 
 const RATE_HZ: f64 = 500.0;
 
@@ -181,14 +184,25 @@ fn generate(spec: &Spec, seed: u64) -> Generated {
     Generated { demo, true_force_n }
 }
 
-fn span() -> ir::SourceSpan {
-    ir::SourceSpan {
-        file: "test.skill".into(),
-        line: 1,
-        column: 1,
-        start: 0,
-        end: 0,
-    }
+/// The largest distance between the settled forces and the generator's true ones \[N\].
+fn worst_error(settled: &Demo, generated: &Generated) -> f64 {
+    settled
+        .force_n
+        .iter()
+        .zip(&generated.true_force_n)
+        .map(|(f, truth)| (f - truth).norm())
+        .fold(0.0, f64::max)
+}
+
+/// `spec`'s demonstration written in base axes is detected as base, not as a sensor frame.
+fn assert_detected_as_base(spec: &Spec, seed: u64) {
+    let base = Spec {
+        frame: WrenchFrame::Base,
+        ..*spec
+    };
+    let (_, report) = detect(&generate(&base, seed).demo);
+    assert_eq!(report.frame.frame, WrenchFrame::Base, "{}", report.frame);
+    assert_eq!(report.frame.origin, Origin::Detected, "{}", report.frame);
 }
 
 /// The slide's learning plan without its motions: three segments clustered on the force
@@ -381,12 +395,7 @@ fn a_tilted_tool_sliding_with_the_wrench_in_sensor_axes_is_detected_and_rotated(
     );
     assert!(matches!(report.bias, BiasFinding::Removed { .. }), "{}", report.bias);
     assert_eq!(report.sign.sign, ForceSign::OnTool, "{}", report.sign);
-    let worst = settled
-        .force_n
-        .iter()
-        .zip(&generated.true_force_n)
-        .map(|(f, truth)| (f - truth).norm())
-        .fold(0.0, f64::max);
+    let worst = worst_error(&settled, &generated);
     assert!(
         worst < 0.8,
         "rotated and debiased forces are the true base-frame forces (worst {worst} N)"
@@ -409,16 +418,7 @@ fn a_tilted_tool_sliding_with_the_wrench_in_sensor_axes_is_detected_and_rotated(
     assert!(wrong > 20.0, "declared base: z {wrong_z} is {wrong}° off");
 
     // The same demonstration written in base axes is not taken for a sensor-frame file.
-    let base = generate(
-        &Spec {
-            frame: WrenchFrame::Base,
-            ..spec
-        },
-        3,
-    );
-    let (_, report) = detect(&base.demo);
-    assert_eq!(report.frame.frame, WrenchFrame::Base, "{}", report.frame);
-    assert_eq!(report.frame.origin, Origin::Detected, "{}", report.frame);
+    assert_detected_as_base(&spec, 3);
 }
 
 #[test]
@@ -441,12 +441,7 @@ fn a_sensor_turned_half_a_turn_about_the_tool_axis_is_detected() {
         "{}",
         report.frame
     );
-    let worst = settled
-        .force_n
-        .iter()
-        .zip(&generated.true_force_n)
-        .map(|(f, truth)| (f - truth).norm())
-        .fold(0.0, f64::max);
+    let worst = worst_error(&settled, &generated);
     assert!(worst < 0.8, "worst error {worst} N");
     let (z, force) = plane_and_force(&learn(&generated.demo, &LearnOptions::default()));
     assert!(angle_deg(&z, &-Vector3::z()) < 2.0, "plane z {z}");
@@ -490,19 +485,7 @@ fn a_tilted_tool_pressing_in_place_with_the_wrench_in_sensor_axes_is_detected_by
         angle_deg(peak, &Vector3::z()) < 3.0,
         "the pressing force is vertical: {peak}"
     );
-
-    let (_, report) = detect(
-        &generate(
-            &Spec {
-                frame: WrenchFrame::Base,
-                ..spec
-            },
-            4,
-        )
-        .demo,
-    );
-    assert_eq!(report.frame.frame, WrenchFrame::Base, "{}", report.frame);
-    assert_eq!(report.frame.origin, Origin::Detected, "{}", report.frame);
+    assert_detected_as_base(&spec, 4);
 }
 
 #[test]

@@ -22,7 +22,7 @@ pub(crate) fn root() -> PathBuf {
 /// A span for IR written by hand.
 pub(crate) fn span() -> ir::SourceSpan {
     ir::SourceSpan {
-        file: "touch.skill".into(),
+        file: "test.skill".into(),
         line: 1,
         column: 1,
         start: 0,

@@ -208,11 +208,7 @@ impl Sensed {
         let applied = rig.controller.state().applied;
         Sensed {
             applied,
-            force_error_max: last_cmd.and_then(|cmd| {
-                let mut target = cmd.clone();
-                target.wrench.fixed_rows_mut::<3>(0).copy_from(&target_force);
-                force_error(&target, &applied)
-            }),
+            force_error_max: last_cmd.and_then(|cmd| force_error(cmd, &target_force, &applied)),
         }
     }
 }
@@ -693,11 +689,12 @@ fn unit(axis: ir::Axis) -> Vector3<f64> {
     }
 }
 
-/// The largest force error over the force-controlled axes, in the compliant frame.
-fn force_error(cmd: &Command, applied: &Vector6<f64>) -> Option<f64> {
+/// The largest force error over the force-controlled axes of `cmd`, in the compliant frame,
+/// against `target_force` (the state's own, before any ramp) and the commanded moments.
+fn force_error(cmd: &Command, target_force: &Vector3<f64>, applied: &Vector6<f64>) -> Option<f64> {
     let rotation = cmd.frame.rotation.inverse();
     let desired = (
-        rotation * cmd.wrench.fixed_rows::<3>(0).into_owned(),
+        rotation * target_force,
         rotation * cmd.wrench.fixed_rows::<3>(3).into_owned(),
     );
     let measured = (

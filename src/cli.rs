@@ -111,6 +111,7 @@ pub enum Command {
     #[command(after_help = "Examples:
   skillc eval                                  # the standard skills, demonstrations and scenes
   skillc eval --skill slide --out slide-report
+  skillc eval --robot iiwa14                   # the same skills and scenes on the KUKA LBR iiwa 14
   skillc eval --trials my-trials.toml --threads 1")]
     Eval(crate::eval::EvalArgs),
     /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.

@@ -54,6 +54,10 @@ const FILES: &[(&str, &str)] = &[
         "examples/robots/lwr4.urdf",
         include_str!("../examples/robots/lwr4.urdf"),
     ),
+    (
+        "examples/robots/iiwa14.urdf",
+        include_str!("../examples/robots/iiwa14.urdf"),
+    ),
 ];
 
 /// The file whose presence marks a complete folder of defaults.
@@ -148,6 +152,15 @@ mod tests {
                 StdSkill::ALL.iter().any(|s| s.name() == stem),
                 "demo `{demo}` is not generated"
             );
+        }
+    }
+
+    /// `skillc eval --robot NAME` from any folder needs every shipped robot's URDF.
+    #[test]
+    fn the_defaults_hold_every_shipped_robot() {
+        for robot in skill_runtime::robot::BUILTIN_ROBOTS {
+            let built_in = FILES.iter().find(|(path, _)| *path == robot.path);
+            assert_eq!(built_in.map(|(_, text)| *text), Some(robot.urdf), "{}", robot.name);
         }
     }
 

@@ -5,6 +5,7 @@
 pub mod metrics;
 pub mod real;
 mod report;
+pub mod robot;
 pub mod sweep;
 
 use std::path::{Path, PathBuf};
@@ -53,6 +54,11 @@ pub struct EvalArgs {
     /// Tighten or loosen a safety limit for every trial, e.g. `--limit force=60` (see `skillc run`).
     #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = crate::run_cmd::parse_limit)]
     pub limits: Vec<(String, f64)>,
+    /// Run every trial on this shipped robot instead of the scene's (`lwr4`, `iiwa14`): the
+    /// skills learned from the same demonstrations, the robot's tool starting where the scene's
+    /// robot starts its tool (inverse kinematics), objects and sensor as the scene has them.
+    #[arg(long, value_name = "NAME", conflicts_with = "real")]
+    pub robot: Option<String>,
     /// Instead of the listed variants, reproduce each skill in N scenes drawn at random within
     /// its `sweep` ranges (default: height ±10 cm, tilt ±10°, position ±3 cm, friction 0.2-1.0,
     /// sensor noise 1-3×); report success rates and failures by reason.
@@ -221,6 +227,8 @@ struct Prepared {
     demo_peak_n: f64,
     spec: SkillTrials,
     base_dir: PathBuf,
+    /// The robot `--robot` puts into every scene.
+    swap: Option<std::sync::Arc<robot::Swap>>,
 }
 
 /// One trial to run.
@@ -321,6 +329,7 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
         demo_peak_n,
         spec,
         base_dir: base_dir.to_path_buf(),
+        swap: None,
     }
 }
 
@@ -378,7 +387,15 @@ fn run_job(
         Ok(parts) => parts,
         Err(message) => return failed(message.clone()),
     };
-    let scene = match load_scene(&prepared.base_dir.join(&prepared.spec.scene), &variant.set) {
+    let scene_path = prepared.base_dir.join(&prepared.spec.scene);
+    let mut sets = variant.set.clone();
+    if let Some(swap) = &prepared.swap {
+        match swap.sets(&scene_path, &sets) {
+            Ok(extra) => sets.extend(extra),
+            Err(message) => return failed(message),
+        }
+    }
+    let scene = match load_scene(&scene_path, &sets) {
         Ok(scene) => scene,
         Err(Failure::Input(message) | Failure::Usage(message)) => return failed(message),
         Err(Failure::Closed) => return failed("standard output closed".to_string()),
@@ -460,7 +477,7 @@ fn run_job(
                 .map(|v| format!("{}@{:.2}", v.state, v.enter_s))
                 .collect(),
             draw: None,
-            set: variant.set.clone(),
+            set: sets,
         },
         log,
     }
@@ -509,8 +526,18 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     progress.set_message("learning");
-    let prepared: Vec<Prepared> =
+    let swap = match &args.robot {
+        Some(name) => Some(std::sync::Arc::new(robot::Swap::new(
+            name,
+            &crate::defaults::root().map_err(Failure::Usage)?,
+        )?)),
+        None => None,
+    };
+    let mut prepared: Vec<Prepared> =
         pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
+    for prep in &mut prepared {
+        prep.swap.clone_from(&swap);
+    }
     let bound: Vec<Bound<'_>> = prepared.iter().map(bind_prepared).collect();
     if let Some(draws) = args.sweep {
         return run_sweep(args, draws, &prepared, &bound, &pool, &progress, started);
@@ -554,6 +581,12 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let elapsed = started.elapsed().as_secs_f64();
 
     let table = report::table(&outcomes);
+    if let Some(swap) = &swap {
+        crate::out::print(&format!(
+            "robot: {} ({}), its tool starting where each scene's robot starts its tool\n",
+            swap.robot.name, swap.robot.title
+        ))?;
+    }
     crate::out::print(&format!("{table}{} trials in {elapsed:.1} s\n", outcomes.len()))?;
     let real = match &args.real {
         Some(dir) => {

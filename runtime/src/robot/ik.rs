@@ -30,8 +30,10 @@ impl Robot {
     /// seeds are tried in order and the first solution wins.
     ///
     /// 1. For a 7-joint arm, [`LWR4_ELBOW_UP`] with joint 1 turned towards the target (the arm's
-    ///    base yaw: the elbow then bends in the plane of the target). Its solutions keep the
-    ///    elbow up and the wrist unflipped, as a tabletop task wants. It recovered every one of
+    ///    base yaw: the elbow then bends in the plane of the target), each joint's sign matched
+    ///    to this arm's axis directions ([`Robot::elbow_up_seed`]: the iiwa 14 turns joints 2, 4
+    ///    and 6 the other way round from the LWR-IV). Its solutions keep the elbow up and the
+    ///    wrist unflipped, as a tabletop task wants. On the LWR-IV it recovered every one of
     ///    300 poses reached from configurations within 0.6 rad of that pose, and 278 of 300 from
     ///    anywhere in the joint ranges.
     /// 2. The middle of the joint ranges (the LWR-IV's: stretched straight up, a singular
@@ -51,8 +53,7 @@ impl Robot {
                 }
             })
             .collect();
-        if self.dof() == LWR4_ELBOW_UP.len() {
-            let mut elbow_up = LWR4_ELBOW_UP;
+        if let Some(mut elbow_up) = self.elbow_up_seed() {
             let p = target.translation.vector;
             if p.x.is_finite() && p.y.is_finite() && p.x.hypot(p.y) > 1e-9 {
                 elbow_up[0] = p.y.atan2(p.x);
@@ -62,6 +63,43 @@ impl Robot {
             }
         }
         self.inverse_kinematics(target, &middle)
+    }
+
+    /// [`LWR4_ELBOW_UP`] for this arm: a 7-joint arm whose axes at q = 0 are those of the LWR-IV
+    /// up to sign (z, ∓y, z, ±y, z, ∓y, z in the base frame, stretched straight up) gets the
+    /// LWR-IV's elbow-up angles with each joint's sign matched to its axis; an arm with other
+    /// axes the LWR-IV's angles as they are (a seed only), an arm with another joint count none.
+    pub fn elbow_up_seed(&self) -> Option<[f64; 7]> {
+        const LWR4_AXES: [[f64; 3]; 7] = [
+            [0.0, 0.0, 1.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        if self.dof() != LWR4_ELBOW_UP.len() {
+            return None;
+        }
+        let mut data = self.data();
+        let mut jacobian = nalgebra::Matrix6xX::zeros(self.dof());
+        self.forward_kinematics(&mut data, &[0.0; 7]);
+        self.tool_jacobian(&data, &mut jacobian);
+        let mut seed = LWR4_ELBOW_UP;
+        let mut signs = [1.0; 7];
+        for (i, reference) in LWR4_AXES.iter().enumerate() {
+            let axis = jacobian.fixed_view::<3, 1>(3, i).into_owned();
+            let dot = axis.dot(&nalgebra::Vector3::from(*reference));
+            if (dot.abs() - 1.0).abs() > 1e-6 {
+                return Some(LWR4_ELBOW_UP);
+            }
+            signs[i] = dot.signum();
+        }
+        for (value, sign) in seed.iter_mut().zip(signs) {
+            *value *= sign;
+        }
+        Some(seed)
     }
 
     /// Joint positions that put the tool link at `target` (base frame), found by damped least

@@ -15,6 +15,7 @@
 //! # assert!(tool_in_base.translation.z > 1.0);
 //! ```
 
+mod builtin;
 mod chain;
 mod dynamics;
 mod error;
@@ -23,6 +24,7 @@ mod inspect;
 mod kinematics;
 mod model;
 
+pub use builtin::{BuiltinRobot, BUILTIN_ROBOTS, IIWA14, LWR4};
 pub use error::RobotError;
 pub use ik::LWR4_ELBOW_UP;
 pub use inspect::{Inspection, JointSummary};

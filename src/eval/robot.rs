@@ -93,3 +93,60 @@ impl Swap {
 fn toml_string(text: &str) -> String {
     toml::Value::String(text.to_owned()).to_string()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn root() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    }
+
+    /// The iiwa takes the LWR-IV's place with its tool where the LWR-IV's `q0` puts it, also
+    /// for a variant that raises the start with its own `q0`.
+    #[test]
+    fn the_swapped_robot_starts_its_tool_where_the_scene_robot_does() {
+        let swap = Swap::new("iiwa14", &root()).expect("shipped");
+        let scene = root().join("examples/scenes/table.toml");
+        let raised = "robot.q0=[0.0, -0.454318493, 0.0, 1.431100155, 0.0, -1.256174005, 0.0]".to_string();
+        for variant in [vec![], vec!["table.z=0.305".to_string(), raised]] {
+            let extra = swap.sets(&scene, &variant).expect("reachable");
+            assert_eq!(extra.len(), 4, "{extra:?}");
+            let lwr_scene = load_scene(&scene, &variant).expect("scene");
+            let lwr = Robot::from_urdf_file(&lwr_scene.urdf_path(), Some("probe_tip")).expect("lwr");
+            let (lwr_tool, _, _) = lwr.evaluate(&lwr_scene.start_configuration(&lwr).expect("q0"));
+            let all: Vec<String> = variant.iter().chain(&extra).cloned().collect();
+            let iiwa_scene = load_scene(&scene, &all).expect("swapped scene");
+            assert_eq!(iiwa_scene.urdf_path(), swap.urdf);
+            assert_eq!(iiwa_scene.spec().robot.sensor, "iiwa_flange");
+            let q = iiwa_scene.start_configuration(&swap.model).expect("q0");
+            let (iiwa_tool, _, _) = swap.model.evaluate(&q);
+            let miss = (iiwa_tool.translation.vector - lwr_tool.translation.vector).norm();
+            assert!(miss < 1e-6, "{miss} m");
+            assert!(iiwa_tool.rotation.angle_to(&lwr_tool.rotation) < 1e-5);
+        }
+    }
+
+    #[test]
+    fn a_scene_that_already_holds_the_robot_is_left_as_it_is() {
+        let swap = Swap::new("iiwa14", &root()).expect("shipped");
+        let scene = root().join("examples/scenes/iiwa14/button.toml");
+        assert_eq!(swap.sets(&scene, &[]), Ok(Vec::new()));
+        let lwr = Swap::new("lwr4", &root()).expect("shipped");
+        assert_eq!(
+            lwr.sets(&root().join("examples/scenes/button.toml"), &[]),
+            Ok(Vec::new())
+        );
+        assert_eq!(lwr.sets(&scene, &[]).map(|sets| sets.len()), Ok(4));
+    }
+
+    #[test]
+    fn an_unknown_robot_names_the_shipped_ones() {
+        match Swap::new("panda", &root()) {
+            Err(Failure::Usage(message)) => {
+                assert_eq!(message, "unknown robot `panda` for --robot (shipped: lwr4, iiwa14)")
+            }
+            other => panic!("expected a usage error, got {:?}", other.map(|swap| swap.robot)),
+        }
+    }
+}

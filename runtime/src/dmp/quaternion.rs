@@ -229,20 +229,27 @@ impl QuatRollout {
         let h = dt_s / substeps as f64;
         let start_error = quat_error(&self.start, &self.goal);
         for _ in 0..substeps {
+            // The learned term `f(s) − δ(q₀, g) s`, dropped past the demonstration's end.
+            let ended = dmp.basis.ended(self.s);
             let window = dmp.basis.eval(self.s, &mut self.scratch);
             let range = window.first..window.first + window.len;
             let den: f64 = self.scratch[range.clone()].iter().sum();
-            let mut forcing = Vector3::zeros();
+            let mut blend = Vector3::zeros();
             for axis in 0..3 {
                 let num: f64 = self.scratch[range.clone()]
                     .iter()
                     .zip(&dmp.weights[axis][range.clone()])
                     .map(|(p, w)| p * w)
                     .sum();
-                forcing[axis] = num / den * self.s;
+                blend[axis] = num / den;
             }
+            let learned = if ended {
+                Vector3::zeros()
+            } else {
+                (blend - start_error) * self.s
+            };
             let error = quat_error(&self.q, &self.goal);
-            let accel = error * k - self.eta * d - start_error * (k * self.s) + forcing * k;
+            let accel = error * k - self.eta * d + learned * k;
             self.eta += accel * (h / self.tau_s);
             self.q = UnitQuaternion::from_scaled_axis(self.eta * (h / self.tau_s)) * self.q;
             self.s = canonical.step(self.s, h, self.tau_s);

@@ -118,6 +118,8 @@ impl DmpRollout {
         let substeps = (dt_s / max_step).ceil().max(1.0) as usize;
         let h = dt_s / substeps as f64;
         for _ in 0..substeps {
+            // The learned term `f(s) − (g − x₀) s`, dropped past the demonstration's end.
+            let ended = dmp.basis.ended(self.s);
             let window = dmp.basis.eval(self.s, &mut self.scratch);
             let range = window.first..window.first + window.len;
             let den: f64 = self.scratch[range.clone()].iter().sum();
@@ -127,9 +129,9 @@ impl DmpRollout {
                     .zip(&dmp.weights[c][range.clone()])
                     .map(|(p, w)| p * w)
                     .sum();
-                let forcing = num / den * self.s;
                 let (g, x0, x) = (self.goal[c], self.start[c], self.x[c]);
-                let accel = k * (g - x) - d * self.v[c] - k * (g - x0) * self.s + k * forcing;
+                let learned = if ended { 0.0 } else { (num / den - (g - x0)) * self.s };
+                let accel = k * (g - x) - d * self.v[c] + k * learned;
                 self.v[c] += h * accel / self.tau_s;
                 self.x[c] += h * self.v[c] / self.tau_s;
             }
@@ -159,4 +161,50 @@ fn copy_checked(dst: &mut [f64], src: &[f64], what: &'static str) -> Result<(), 
     }
     dst.copy_from_slice(src);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::dmp::{Dmp, DmpConfig};
+
+    #[test]
+    fn past_its_end_a_rollout_settles_on_the_goal_without_overshoot() {
+        // A press-like force profile: up to 8 N, held, and partly released, cut at 5 N while
+        // still falling at 21 N/s (a segment boundary placed inside the release).
+        let t: Vec<f64> = (0..=1684).map(|k| k as f64 * 1e-3).collect();
+        let f: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                let release = if t > 1.4 {
+                    -3.0 * ((t - 1.4) / 0.284).powi(2)
+                } else {
+                    0.0
+                };
+                8.0 * (1.0 - (-t / 0.08).exp()) + release
+            })
+            .collect();
+        let config = DmpConfig {
+            n_basis: 30,
+            ..DmpConfig::default()
+        };
+        let dmp = Dmp::fit(&config, &t, &[&f]).expect("valid profile");
+        let goal = dmp.goal[0];
+        let mut rollout = dmp.rollout();
+        let (mut worst_in, mut worst_past): (f64, f64) = (0.0, 0.0);
+        for k in 1..=2 * 1684 {
+            rollout.step(&dmp, 1e-3);
+            let x = rollout.position()[0];
+            if k <= 1684 {
+                worst_in = worst_in.max((x - f[k]).abs());
+            } else {
+                worst_past = worst_past.max((x - goal).abs());
+            }
+        }
+        assert!(worst_in < 0.2, "{worst_in} N off the profile");
+        // From 21 N/s a critically damped spring (ω = √K / τ ≈ 7.4 rad/s) goes ≈ 21 / (7.4 e)
+        // ≈ 1 N past its goal (measured 1.06 N). With the learned term extrapolated past the end
+        // (≈ −7 N there, decaying with the phase) it went 3.9 N past.
+        assert!(worst_past < 1.5, "{worst_past} N from the goal past the end");
+        assert!((rollout.position()[0] - goal).abs() < 0.05, "not settled");
+    }
 }

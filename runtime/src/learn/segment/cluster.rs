@@ -4,8 +4,8 @@
 //!
 //! - [`Temporal::Connectivity`]: samples `i`, `j` are connected when `|i − j| ≤ k`, and only
 //!   connected clusters merge. No `n × n` matrix is built: every cluster keeps a short list of
-//!   its connected neighbours with their linkage distance, and a binary heap over neighbour pairs
-//!   (with lazy deletion by version counters) yields the closest pair. Ward distances are
+//!   its connected neighbours with their linkage distance and its own closest pair, and a
+//!   tournament tree over clusters yields the closest pair of all. Ward distances are
 //!   recomputed exactly from cluster sizes and sums; for single, complete and average linkage
 //!   the distances of connected pairs are updated with the Lance-Williams formulas, and where
 //!   only one of the two merged clusters was connected to a neighbour its distance is carried
@@ -32,7 +32,6 @@
 //! replayed with union-find for each cut.
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 use serde::{Deserialize, Serialize};
 
@@ -173,6 +172,12 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
                     reason: "at least one neighbour".to_owned(),
                 });
             }
+            if n >= 1 << 31 {
+                return Err(SegmentError::InvalidConfig {
+                    name: "temporal",
+                    reason: "connectivity clustering takes fewer than 2^31 samples".to_owned(),
+                });
+            }
             (connectivity_merges(&features.data, dims, k, config.linkage), 1)
         }
         Temporal::TimeFeature { weight, max_blocks } => {
@@ -233,38 +238,6 @@ fn labels_after(
     (0..n).map(|k| find(&mut parent, k / unit_len)).collect()
 }
 
-/// A heap entry: a connected pair and the versions of both clusters when it was pushed.
-#[derive(Debug, Clone, Copy)]
-struct Pair {
-    dist: f64,
-    a: u32,
-    b: u32,
-    version_a: u32,
-    version_b: u32,
-}
-
-impl PartialEq for Pair {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Pair {}
-impl PartialOrd for Pair {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Pair {
-    // Reversed so that `BinaryHeap` pops the smallest distance (ties: earliest pair).
-    fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .dist
-            .total_cmp(&self.dist)
-            .then_with(|| other.a.cmp(&self.a))
-            .then_with(|| other.b.cmp(&self.b))
-    }
-}
-
 fn find(parent: &mut [u32], mut x: usize) -> usize {
     let mut root = x;
     while parent[root] as usize != root {
@@ -278,13 +251,13 @@ fn find(parent: &mut [u32], mut x: usize) -> usize {
     root
 }
 
-fn ward_distance(sum_a: &[f64], n_a: f64, sum_b: &[f64], n_b: f64) -> f64 {
+pub(super) fn ward_distance(sum_a: &[f64], n_a: f64, sum_b: &[f64], n_b: f64) -> f64 {
     let dist2: f64 = sum_a.iter().zip(sum_b).map(|(a, b)| (a / n_a - b / n_b).powi(2)).sum();
     (2.0 * n_a * n_b / (n_a + n_b) * dist2).sqrt()
 }
 
 /// Lance-Williams update of the distance from the union of `a` and `b` to `c`.
-fn lance_williams(linkage: Linkage, d_ac: f64, d_bc: f64, d_ab: f64, n_a: f64, n_b: f64, n_c: f64) -> f64 {
+pub(super) fn lance_williams(linkage: Linkage, d_ac: f64, d_bc: f64, d_ab: f64, n_a: f64, n_b: f64, n_c: f64) -> f64 {
     match linkage {
         Linkage::Single => d_ac.min(d_bc),
         Linkage::Complete => d_ac.max(d_bc),
@@ -296,16 +269,185 @@ fn lance_williams(linkage: Linkage, d_ac: f64, d_bc: f64, d_ab: f64, n_a: f64, n
     }
 }
 
-/// The full merge sequence `(height, a, b)` of connectivity-constrained clustering, in order.
-fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) -> Vec<(f64, usize, usize)> {
+/// Marks a link whose pair the cluster owns (is the first member of, see
+/// [`connectivity_merges`]); the other bits are the neighbour's index.
+const OWNED: u32 = 1 << 31;
+/// No cluster: the partner of a cluster that owns no pair.
+const NONE: u32 = u32::MAX;
+
+/// One link of a cluster: the neighbour (with the [`OWNED`] bit), the position of the
+/// neighbour's link back in the arena, and the linkage distance.
+#[derive(Debug, Clone, Copy)]
+struct Link {
+    other: u32,
+    twin: u32,
+    dist: f64,
+}
+
+impl Link {
+    fn cluster(&self) -> usize {
+        (self.other & !OWNED) as usize
+    }
+}
+
+/// The links of every cluster in one arena, cluster `x`'s at `at[x]..at[x] + len[x]`. Every
+/// link knows where its twin (the neighbour's link back) is, so a merge updates a neighbour's
+/// links in place without searching them. Clusters are laid out in sample order, so neighbours
+/// in time have their links close in memory.
+struct Links {
+    arena: Vec<Link>,
+    at: Vec<u32>,
+    len: Vec<u32>,
+    cap: Vec<u32>,
+}
+
+impl Links {
+    fn range(&self, x: usize) -> std::ops::Range<usize> {
+        self.at[x] as usize..(self.at[x] + self.len[x]) as usize
+    }
+
+    /// Replaces cluster `x`'s links, moving them to the end of the arena when they do not fit,
+    /// and points every twin at its link's new position.
+    fn replace(&mut self, x: usize, links: &[Link]) {
+        let len = links.len() as u32;
+        if len > self.cap[x] {
+            self.cap[x] = len.max(2 * self.cap[x]);
+            self.at[x] = self.arena.len() as u32;
+            let new_len = self.arena.len() + self.cap[x] as usize;
+            self.arena.resize(
+                new_len,
+                Link {
+                    other: NONE,
+                    twin: NONE,
+                    dist: 0.0,
+                },
+            );
+        }
+        let at = self.at[x] as usize;
+        self.arena[at..at + links.len()].copy_from_slice(links);
+        self.len[x] = len;
+        for (pos, link) in (at..).zip(links) {
+            self.arena[link.twin as usize].twin = pos as u32;
+        }
+    }
+
+    /// Removes the link at `pos` of cluster `x` by moving its last link into the hole; returns
+    /// the position the last link came from (`pos` itself when it was the last).
+    fn swap_remove(&mut self, x: usize, pos: usize) -> usize {
+        let last = (self.at[x] + self.len[x] - 1) as usize;
+        self.len[x] -= 1;
+        if last != pos {
+            let moved = self.arena[last];
+            self.arena[pos] = moved;
+            self.arena[moved.twin as usize].twin = pos as u32;
+        }
+        last
+    }
+
+    /// The smallest pair that cluster `x` owns, `(distance, partner)`, ties to the smaller
+    /// partner; `(∞, NONE)` when it owns none.
+    fn best_owned(&self, x: usize) -> (f64, u32) {
+        let mut best = (f64::INFINITY, NONE);
+        for link in &self.arena[self.range(x)] {
+            if link.other & OWNED != 0 {
+                let other = link.other & !OWNED;
+                if best.1 == NONE || link.dist.total_cmp(&best.0).then(other.cmp(&best.1)) == Ordering::Less {
+                    best = (link.dist, other);
+                }
+            }
+        }
+        best
+    }
+}
+
+/// A tournament tree over the clusters' smallest owned pairs: node `i` holds the smallest pair
+/// `(distance, first, second)` of its subtree (`second == NONE` for none), leaves from `leaves`.
+struct Tournament {
+    tree: Vec<(f64, u32, u32)>,
+    leaves: usize,
+}
+
+impl Tournament {
+    /// `best[x]` is cluster `x`'s smallest owned pair `(distance, partner)`.
+    fn new(best: &[(f64, u32)]) -> Self {
+        let leaves = best.len().next_power_of_two();
+        let mut tree = vec![(f64::INFINITY, NONE, NONE); 2 * leaves];
+        for (x, &(dist, partner)) in best.iter().enumerate() {
+            tree[leaves + x] = (dist, x as u32, partner);
+        }
+        for node in (1..leaves).rev() {
+            tree[node] = Self::better(tree[2 * node], tree[2 * node + 1]);
+        }
+        Self { tree, leaves }
+    }
+
+    /// The smaller of two pairs from disjoint subtrees; no pair loses to any pair.
+    fn better(x: (f64, u32, u32), y: (f64, u32, u32)) -> (f64, u32, u32) {
+        match (x.2 == NONE, y.2 == NONE) {
+            (false, true) => x,
+            (true, false) => y,
+            (true, true) => x,
+            (false, false) => match x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)) {
+                Ordering::Greater => y,
+                _ => x,
+            },
+        }
+    }
+
+    /// The partner in cluster `x`'s smallest owned pair (`NONE` for none).
+    fn partner(&self, x: usize) -> u32 {
+        self.tree[self.leaves + x].2
+    }
+
+    fn set(&mut self, x: usize, (dist, partner): (f64, u32)) {
+        let mut node = self.leaves + x;
+        self.tree[node] = (dist, x as u32, partner);
+        while node > 1 {
+            node /= 2;
+            self.tree[node] = Self::better(self.tree[2 * node], self.tree[2 * node + 1]);
+        }
+    }
+
+    /// The smallest pair `(distance, first, second)`, if any remains.
+    fn top(&self) -> Option<(f64, usize, usize)> {
+        let (dist, first, second) = *self.tree.get(1)?;
+        (second != NONE).then_some((dist, first as usize, second as usize))
+    }
+}
+
+/// The full merge sequence `(height, a, b)` of connectivity-constrained clustering, in order:
+/// at every step the connected pair with the smallest linkage distance merges (`b` into `a`).
+/// Needs fewer than 2³¹ samples (checked by [`cluster`]).
+///
+/// Every connected pair of clusters is *owned* by one of its two clusters, its first member:
+/// initially the earlier sample, afterwards the cluster that survived the most recent merge
+/// involving either of them. Pairs are ordered by `(distance, first, second)`, so ties go to
+/// the earliest pair. Each cluster keeps its [`Links`] and a [`Tournament`] over the clusters'
+/// smallest owned pairs yields the smallest pair. A merge relinks the union's neighbours
+/// through the twins; only neighbours whose smallest owned pair involved `a` or `b` rescan
+/// their links, so a merge costs `O(k + log n)` for `k` neighbours in practice.
+pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) -> Vec<(f64, usize, usize)> {
     let n = data.len() / dims;
+    assert!(n < OWNED as usize, "fewer than 2^31 samples (checked by `cluster`)");
     let mut size = vec![1.0f64; n];
     let mut sum = data.to_vec();
-    let mut alive = vec![true; n];
-    let mut version = vec![0u32; n];
-    let mut merges = Vec::with_capacity(n);
-    let mut neighbours: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-    let mut heap = BinaryHeap::with_capacity(n * k * 2);
+    // Cluster means `sum / size`, kept so that a Ward distance needs no division per column
+    // (the same operations as dividing each time, so the same bits).
+    let mut mean = data.to_vec();
+    let cap = 2 * k as u32 + 2;
+    let mut links = Links {
+        arena: vec![
+            Link {
+                other: NONE,
+                twin: NONE,
+                dist: 0.0
+            };
+            n * cap as usize
+        ],
+        at: (0..n as u32).map(|x| x * cap).collect(),
+        len: vec![0; n],
+        cap: vec![cap; n],
+    };
     for i in 0..n {
         for j in i + 1..(i + k + 1).min(n) {
             let dist = data[i * dims..(i + 1) * dims]
@@ -314,39 +456,59 @@ fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) ->
                 .map(|(a, b)| (a - b).powi(2))
                 .sum::<f64>()
                 .sqrt();
-            neighbours[i].push((j as u32, dist));
-            neighbours[j].push((i as u32, dist));
-            heap.push(Pair {
+            let (pi, pj) = (links.at[i] + links.len[i], links.at[j] + links.len[j]);
+            links.arena[pi as usize] = Link {
+                other: j as u32 | OWNED,
+                twin: pj,
                 dist,
-                a: i as u32,
-                b: j as u32,
-                version_a: 0,
-                version_b: 0,
-            });
+            };
+            links.arena[pj as usize] = Link {
+                other: i as u32,
+                twin: pi,
+                dist,
+            };
+            links.len[i] += 1;
+            links.len[j] += 1;
         }
     }
-    // (neighbour, distance to a, distance to b)
-    let mut merged: Vec<(u32, Option<f64>, Option<f64>)> = Vec::new();
-    while let Some(pair) = heap.pop() {
-        let (a, b) = (pair.a as usize, pair.b as usize);
-        if !alive[a] || !alive[b] || version[a] != pair.version_a || version[b] != pair.version_b {
-            continue;
-        }
-        // Merge b into a.
+    let best: Vec<(f64, u32)> = (0..n).map(|x| links.best_owned(x)).collect();
+    let mut tournament = Tournament::new(&best);
+    let mut merges = Vec::with_capacity(n.saturating_sub(1));
+    // Per neighbour c of the union: c, distance to a, distance to b, and the positions of c's
+    // links back to a and to b; `slot[c]` is c's index here while a merge is being processed.
+    let mut merged: Vec<Neighbour> = Vec::new();
+    let mut slot = vec![NONE; n];
+    let mut new_links: Vec<Link> = Vec::new();
+    while let Some((d_ab, a, b)) = tournament.top() {
         merged.clear();
-        for &(c, d) in &neighbours[a] {
-            if c as usize != b {
-                merged.push((c, Some(d), None));
+        for (x, skip) in [(a, b), (b, a)] {
+            for link in &links.arena[links.range(x)] {
+                let c = link.cluster();
+                if c == skip {
+                    continue;
+                }
+                let index = match slot[c] {
+                    NONE => {
+                        slot[c] = merged.len() as u32;
+                        merged.push(Neighbour {
+                            c: c as u32,
+                            to_a: None,
+                            to_b: None,
+                        });
+                        merged.len() - 1
+                    }
+                    index => index as usize,
+                };
+                let back = Some((link.dist, link.twin));
+                if x == a {
+                    merged[index].to_a = back;
+                } else {
+                    merged[index].to_b = back;
+                }
             }
         }
-        for &(c, d) in &neighbours[b] {
-            if c as usize == a {
-                continue;
-            }
-            match merged.iter_mut().find(|entry| entry.0 == c) {
-                Some(entry) => entry.2 = Some(d),
-                None => merged.push((c, None, Some(d))),
-            }
+        for neighbour in &merged {
+            slot[neighbour.c as usize] = NONE;
         }
         let (n_a, n_b) = (size[a], size[b]);
         let (head, tail) = sum.split_at_mut(b.max(a) * dims);
@@ -357,41 +519,75 @@ fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) ->
         };
         sum_a.iter_mut().zip(sum_b).for_each(|(x, y)| *x += y);
         size[a] = n_a + n_b;
-        alive[b] = false;
-        version[a] += 1;
-        merges.push((pair.dist, a, b));
-        neighbours[b] = Vec::new();
-        let mut new_list = Vec::with_capacity(merged.len());
-        for &(c, d_ac, d_bc) in &merged {
-            let c_idx = c as usize;
+        for (m, s) in mean[a * dims..(a + 1) * dims]
+            .iter_mut()
+            .zip(&sum[a * dims..(a + 1) * dims])
+        {
+            *m = s / size[a];
+        }
+        merges.push((d_ab, a, b));
+        links.len[b] = 0;
+        new_links.clear();
+        for neighbour in &merged {
+            let c = neighbour.c as usize;
             let dist = match linkage {
-                Linkage::Ward => ward_distance(
-                    &sum[a * dims..(a + 1) * dims],
-                    size[a],
-                    &sum[c_idx * dims..(c_idx + 1) * dims],
-                    size[c_idx],
-                ),
-                _ => match (d_ac, d_bc) {
-                    (Some(x), Some(y)) => lance_williams(linkage, x, y, pair.dist, n_a, n_b, size[c_idx]),
-                    (Some(x), None) | (None, Some(x)) => x,
-                    (None, None) => continue,
+                Linkage::Ward => {
+                    let (n_a, n_c) = (size[a], size[c]);
+                    let dist2: f64 = mean[a * dims..(a + 1) * dims]
+                        .iter()
+                        .zip(&mean[c * dims..(c + 1) * dims])
+                        .map(|(x, y)| (x - y).powi(2))
+                        .sum();
+                    (2.0 * n_a * n_c / (n_a + n_c) * dist2).sqrt()
+                }
+                _ => match (neighbour.to_a, neighbour.to_b) {
+                    (Some((x, _)), Some((y, _))) => lance_williams(linkage, x, y, d_ab, n_a, n_b, size[c]),
+                    (Some((x, _)), None) | (None, Some((x, _))) => x,
+                    (None, None) => unreachable!("a neighbour of a or b"),
                 },
             };
-            new_list.push((c, dist));
-            let list = &mut neighbours[c_idx];
-            list.retain(|&(other, _)| other as usize != a && other as usize != b);
-            list.push((a as u32, dist));
-            heap.push(Pair {
+            // c keeps one link to the union, not owned by c: the one to a when it had one.
+            let back = match (neighbour.to_a, neighbour.to_b) {
+                (Some((_, to_a)), Some((_, to_b))) => {
+                    let moved_from = links.swap_remove(c, to_b as usize);
+                    if moved_from == to_a as usize {
+                        to_b
+                    } else {
+                        to_a
+                    }
+                }
+                (Some((_, pos)), None) | (None, Some((_, pos))) => pos,
+                (None, None) => unreachable!("a neighbour of a or b"),
+            };
+            links.arena[back as usize] = Link {
+                other: a as u32,
+                twin: NONE,
                 dist,
-                a: a as u32,
-                b: c,
-                version_a: version[a],
-                version_b: version[c_idx],
+            };
+            new_links.push(Link {
+                other: c as u32 | OWNED,
+                twin: back,
+                dist,
             });
+            let partner = tournament.partner(c) as usize;
+            if partner == a || partner == b {
+                tournament.set(c, links.best_owned(c));
+            }
         }
-        neighbours[a] = new_list;
+        links.replace(a, &new_links);
+        tournament.set(a, links.best_owned(a));
+        tournament.set(b, (f64::INFINITY, NONE));
     }
     merges
+}
+
+/// A neighbour `c` of a merging pair: its distance to `a` and to `b` with the position of its
+/// link back, for each that it is linked to.
+#[derive(Debug, Clone, Copy)]
+struct Neighbour {
+    c: u32,
+    to_a: Option<(f64, u32)>,
+    to_b: Option<(f64, u32)>,
 }
 
 fn condensed_index(m: usize, i: usize, j: usize) -> usize {

@@ -247,4 +247,6 @@ pub(crate) fn tidy_segments(
 }
 
 #[cfg(test)]
+mod reference;
+#[cfg(test)]
 mod tests;

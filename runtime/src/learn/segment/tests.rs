@@ -268,3 +268,67 @@ fn segmentation_plan_dispatches_and_checks_the_count() {
     assert_eq!(back, plan);
     assert_eq!(segment_demo(&demo, &Segmentation::None, None).expect("one").len(), 1);
 }
+
+/// Random rows: Gaussian, or quantised to halves so that many distances tie exactly.
+fn random_rows(n: usize, dims: usize, seed: u64, quantised: bool) -> Vec<f64> {
+    let mut rng = Rng::new(seed);
+    (0..n * dims)
+        .map(|_| {
+            let v = rng.normal();
+            if quantised {
+                (2.0 * v).round() / 2.0
+            } else {
+                v
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn connectivity_merges_equal_the_heap_implementation_exactly() {
+    for seed in 0..4 {
+        for quantised in [false, true] {
+            let data = random_rows(300, 3, 100 + seed, quantised);
+            for linkage in [Linkage::Ward, Linkage::Complete, Linkage::Average, Linkage::Single] {
+                for k in [1, 2, 5, 10] {
+                    let fast = super::cluster::connectivity_merges(&data, 3, k, linkage);
+                    let reference = super::reference::heap_merges(&data, 3, k, linkage);
+                    assert_eq!(fast.len(), 299, "{linkage:?} k={k}: a full tree");
+                    assert!(
+                        fast == reference,
+                        "{linkage:?} k={k} seed={seed} quantised={quantised}: merges differ"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn connectivity_ward_equals_brute_force_on_random_data() {
+    let n = 60;
+    for seed in 0..3 {
+        let data = random_rows(n, 2, 200 + seed, false);
+        for k in [1, 3, 5] {
+            let fast = super::cluster::connectivity_merges(&data, 2, k, Linkage::Ward);
+            let brute = super::reference::brute_force_ward(&data, 2, k);
+            assert_eq!(fast.len(), brute.len(), "k={k}");
+            // Replay the fast merges with member lists.
+            let mut members: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
+            for (step, (&(height, a, b), (expected, x, y))) in fast.iter().zip(&brute).enumerate() {
+                let moved = std::mem::take(&mut members[b]);
+                let pair = [members[a].clone(), moved.clone()];
+                members[a].extend(moved);
+                members[a].sort_unstable();
+                assert!(
+                    (height - expected).abs() <= 1e-9 * expected.max(1.0),
+                    "k={k} seed={seed} step {step}: height {height} vs {expected}"
+                );
+                assert!(
+                    (&pair[0] == x && &pair[1] == y) || (&pair[0] == y && &pair[1] == x),
+                    "k={k} seed={seed} step {step}: merged {pair:?}, brute force {x:?} + {y:?}"
+                );
+            }
+        }
+    }
+}

@@ -21,6 +21,8 @@
 //! When `expected_segments` is set and more segments were found, adjacent segments are merged
 //! by the smallest loss of evidence until the count matches.
 
+use std::cmp::Ordering;
+
 use serde::{Deserialize, Serialize};
 
 use super::features::{FeatureSet, Features};
@@ -37,12 +39,22 @@ pub enum SegmentModel {
     Linear,
 }
 
+/// A model with `p` parameters per column explains only segments of at least
+/// `MIN_SAMPLES_PER_PARAMETER · p` samples: with fewer, the maximum-likelihood noise variance
+/// collapses (a line through 2 samples fits them exactly) and the BIC evidence is meaningless.
+const MIN_SAMPLES_PER_PARAMETER: usize = 5;
+
 impl SegmentModel {
     fn n_params(self) -> f64 {
         match self {
             SegmentModel::Constant => 2.0,
             SegmentModel::Linear => 3.0,
         }
+    }
+
+    /// The shortest segment (samples) this model may explain.
+    fn min_samples(self) -> usize {
+        MIN_SAMPLES_PER_PARAMETER * self.n_params() as usize
     }
 }
 
@@ -142,34 +154,55 @@ impl Prefix {
         Self { dims, time, values }
     }
 
-    /// Log evidence (max log-likelihood − BIC penalty) of `y[start..end]` under `model`;
-    /// `log_len(m)` is `ln m`.
-    fn evidence(&self, start: usize, end: usize, model: SegmentModel, floor_var: f64, log_len: &[f64]) -> f64 {
+    /// Log evidence (max log-likelihood − BIC penalty) of `y[start..end]` under the constant and
+    /// the linear model (each only when asked for in `which`, else −∞), sharing the sums both
+    /// need; `log_len[m]` is `ln m`.
+    fn evidences(&self, start: usize, end: usize, which: [bool; 2], floor_var: f64, log_len: &[f64]) -> [f64; 2] {
         let [t_end, t_start] = [self.time[end], self.time[start]];
         let n = t_end[0] - t_start[0];
         let st = t_end[1] - t_start[1];
-        let stt_c = (t_end[2] - t_start[2]) - st * st / n;
-        // Σ ln σ² over columns as the log of a product (one logarithm per segment).
-        let mut var_product = 1.0;
-        let mut log_sum = 0.0;
+        let stt_c = if which[1] {
+            (t_end[2] - t_start[2]) - st * st / n
+        } else {
+            0.0
+        };
+        // Σ ln σ² over columns as the log of a product (one logarithm per segment and model).
+        let mut var_product = [1.0, 1.0];
+        let mut log_sum = [0.0, 0.0];
+        let mut accumulate = |m: usize, sse: f64| {
+            var_product[m] *= (sse / n).max(floor_var);
+            if !(1e-150..=1e150).contains(&var_product[m]) {
+                log_sum[m] += var_product[m].ln();
+                var_product[m] = 1.0;
+            }
+        };
         for col in 0..self.dims {
             let (e, s) = (self.values[end * self.dims + col], self.values[start * self.dims + col]);
             let (sy, syy, sty) = (e[0] - s[0], e[1] - s[1], e[2] - s[2]);
-            let mut sse = syy - sy * sy / n;
-            if model == SegmentModel::Linear && stt_c > 1e-300 {
-                let sty_c = sty - st * sy / n;
-                sse -= sty_c * sty_c / stt_c;
+            let sse = syy - sy * sy / n;
+            if which[0] {
+                accumulate(0, sse);
             }
-            var_product *= (sse / n).max(floor_var);
-            if !(1e-150..=1e150).contains(&var_product) {
-                log_sum += var_product.ln();
-                var_product = 1.0;
+            if which[1] {
+                let mut sse_linear = sse;
+                if stt_c > 1e-300 {
+                    let sty_c = sty - st * sy / n;
+                    sse_linear -= sty_c * sty_c / stt_c;
+                }
+                accumulate(1, sse_linear);
             }
         }
-        log_sum += var_product.ln();
         let dims = self.dims as f64;
         let log_n = log_len[end - start];
-        -0.5 * n * (dims * ((2.0 * std::f64::consts::PI).ln() + 1.0) + log_sum) - 0.5 * model.n_params() * dims * log_n
+        let mut out = [f64::NEG_INFINITY; 2];
+        for (m, model) in [SegmentModel::Constant, SegmentModel::Linear].into_iter().enumerate() {
+            if which[m] {
+                let log_sum = log_sum[m] + var_product[m].ln();
+                out[m] = -0.5 * n * (dims * ((2.0 * std::f64::consts::PI).ln() + 1.0) + log_sum)
+                    - 0.5 * model.n_params() * dims * log_n;
+            }
+        }
+        out
     }
 }
 
@@ -233,7 +266,9 @@ pub fn changepoint(
             reason: "must be a non-negative number of seconds".to_owned(),
         });
     }
-    let alpha = ((config.min_length_s / mean_dt).round() as usize).max(2);
+    // No segment shorter than `min_length_s`, nor than the shortest any candidate model explains.
+    let shortest_model = config.models.iter().map(|m| m.min_samples()).min().unwrap_or(2);
+    let alpha = ((config.min_length_s / mean_dt).round() as usize).max(2).max(shortest_model);
     if n < alpha {
         return Err(SegmentError::TooFewSamples {
             found: n,
@@ -258,11 +293,20 @@ pub fn changepoint(
     let t_norm: Vec<f64> = t_s.iter().map(|t| (t - t_s[0]) / duration.max(1e-300)).collect();
     let prefix = Prefix::new(&features.data, dims, &t_norm);
     let log_len: Vec<f64> = (0..=n).map(|m| (m.max(1) as f64).ln()).collect();
+    let uses = |model: SegmentModel| config.models.contains(&model);
+    let (constant, linear) = (uses(SegmentModel::Constant), uses(SegmentModel::Linear));
+    // The best model for `y[start..end]` (the first listed among equals) and its evidence.
     let best_model = |start: usize, end: usize| {
+        let len = end - start;
+        let which = [
+            constant && len >= SegmentModel::Constant.min_samples(),
+            linear && len >= SegmentModel::Linear.min_samples(),
+        ];
+        let evidence = prefix.evidences(start, end, which, floor_var, &log_len);
         config
             .models
             .iter()
-            .map(|&model| (prefix.evidence(start, end, model, floor_var, &log_len), model))
+            .map(|&model| (evidence[model as usize], model))
             .fold((f64::NEG_INFINITY, SegmentModel::Constant), |best, cur| {
                 if cur.0 > best.0 {
                     cur
@@ -275,30 +319,35 @@ pub fn changepoint(
     let mut map = vec![f64::NEG_INFINITY; n + 1];
     let mut back: Vec<(usize, SegmentModel)> = vec![(0, SegmentModel::Constant); n + 1];
     map[0] = 0.0;
-    let mut particles: Vec<usize> = Vec::with_capacity(2 * config.max_particles + 2);
-    let mut scored: Vec<(f64, usize)> = Vec::with_capacity(2 * config.max_particles + 2);
+    // Candidate starts in increasing order; each step adds at most one and drops the one with
+    // the lowest score when there are more than `max_particles`.
+    let mut particles: Vec<usize> = Vec::with_capacity(config.max_particles + 1);
     for t in alpha..=n {
         let new_start = t - alpha;
         if map[new_start].is_finite() {
             particles.push(new_start);
         }
-        scored.clear();
+        let full = particles.len() > config.max_particles;
         let mut best = (f64::NEG_INFINITY, 0usize, SegmentModel::Constant);
-        for &j in &particles {
+        let mut worst = (f64::INFINITY, 0usize);
+        for (index, &j) in particles.iter().enumerate() {
             let (evidence, model) = best_model(j, t);
             let base = evidence + log_model_prior + map[j];
             let candidate = base + log_g(t - j);
             if candidate > best.0 {
                 best = (candidate, j, model);
             }
-            scored.push((base + log_survival(t - j), j));
+            if full {
+                let score = base + log_survival(t - j);
+                if score.total_cmp(&worst.0) == Ordering::Less {
+                    worst = (score, index);
+                }
+            }
         }
         map[t] = best.0;
         back[t] = (best.1, best.2);
-        if particles.len() > config.max_particles {
-            scored.select_nth_unstable_by(config.max_particles - 1, |a, b| b.0.total_cmp(&a.0));
-            particles.clear();
-            particles.extend(scored[..config.max_particles].iter().map(|&(_, j)| j));
+        if full {
+            particles.remove(worst.1);
         }
     }
     // The last segment runs to the end of the data (survival, not a change at n).

@@ -332,3 +332,36 @@ fn connectivity_ward_equals_brute_force_on_random_data() {
         }
     }
 }
+
+/// 10 000 samples of piecewise-constant 1-D data with 10 breaks 909 samples apart, levels
+/// cycling through five values, plus Gaussian noise of standard deviation `noise`.
+fn steps_1d(noise: f64, seed: u64) -> (Features, Vec<f64>, Vec<usize>) {
+    let breaks: Vec<usize> = (1..=10).map(|b| b * 909).collect();
+    let levels = [0.0, 3.0, 1.0, 4.0, 2.0];
+    let mut rng = Rng::new(seed);
+    let data = (0..10_000)
+        .map(|k| levels[breaks.iter().filter(|&&b| b <= k).count() % 5] + noise * rng.normal())
+        .collect();
+    let t = (0..10_000).map(|k| k as f64 * 1e-3).collect();
+    (Features { data, dims: 1 }, t, breaks)
+}
+
+#[test]
+fn changepoint_without_a_minimum_length_finds_the_true_breaks() {
+    // No minimum length in seconds: only the models' own minimum lengths keep the linear model
+    // from explaining 2-sample pieces exactly.
+    for models in [vec![SegmentModel::Constant], vec![SegmentModel::Constant, SegmentModel::Linear]] {
+        for seed in 0..3 {
+            let (signal, t, breaks) = steps_1d(0.5, 300 + seed);
+            let config = ChangepointConfig {
+                models: models.clone(),
+                min_length_s: 0.0,
+                ..ChangepointConfig::default()
+            };
+            let found = changepoint(&signal, &t, &config).expect("valid input");
+            let plain: Vec<Segment> = found.iter().map(|s| s.segment).collect();
+            // Exactly 10 breaks; a noisy sample next to a break may go either way.
+            assert_breaks(&plain, &breaks, 2, &format!("models {models:?} seed {seed}"));
+        }
+    }
+}

@@ -117,6 +117,7 @@ pub enum Command {
     /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.
     #[command(after_help = "Examples:
   skillc robot examples/robots/lwr4.urdf
+  skillc robot iiwa14 --q 0,0.5,0,-1.5,0,1.14,0    # a shipped robot by name (lwr4, iiwa14)
   skillc robot examples/robots/lwr4.urdf --tool probe_tip --q 0,-0.5,0,1.5,0,-1.14,0 --json")]
     Robot(crate::robot_cmd::RobotArgs),
     /// Write the shipped synthetic demonstrations (and their ground truth) of the standard skills.

@@ -1,8 +1,9 @@
-//! `skillc robot URDF [--tool LINK] [--q Q1,...,Qn] [--json]`: inspect a robot description.
+//! `skillc robot URDF [--tool LINK] [--q Q1,...,Qn] [--json]`: inspect a robot description (a
+//! file, or a shipped robot by name: `lwr4`, `iiwa14`).
 
 use std::path::PathBuf;
 
-use skill_runtime::robot::{Robot, RobotError};
+use skill_runtime::robot::{BuiltinRobot, Robot, RobotError};
 
 use crate::load::{error_chain, Failure};
 use crate::out;
@@ -11,9 +12,9 @@ use crate::out;
 /// the tool Jacobian and the gravity torques.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RobotArgs {
-    /// The URDF file.
+    /// The URDF file, or a shipped robot's name (`lwr4`, `iiwa14`) when no such file exists.
     pub urdf: PathBuf,
-    /// The tool link (default: the last link of the chain).
+    /// The tool link (default: the last link of the chain; a shipped robot's probe tip).
     #[arg(long, value_name = "LINK")]
     pub tool: Option<String>,
     /// Joint positions in rad, comma separated (default: all zero).
@@ -42,7 +43,16 @@ fn failure(err: &RobotError) -> Failure {
 }
 
 fn inspect(args: &RobotArgs) -> Result<String, Failure> {
-    let robot = Robot::from_urdf_file(&args.urdf, args.tool.as_deref()).map_err(|err| failure(&err))?;
+    let builtin = args
+        .urdf
+        .to_str()
+        .filter(|_| !args.urdf.exists())
+        .and_then(BuiltinRobot::find);
+    let robot = match builtin {
+        Some(shipped) => Robot::from_urdf_str(shipped.urdf, Some(args.tool.as_deref().unwrap_or(shipped.tool))),
+        None => Robot::from_urdf_file(&args.urdf, args.tool.as_deref()),
+    }
+    .map_err(|err| failure(&err))?;
     let inspection = robot.inspect(args.q.as_deref()).map_err(|err| match err {
         RobotError::WrongDof { .. } | RobotError::NonFinite { .. } => Failure::Usage(error_chain(&err)),
         _ => failure(&err),

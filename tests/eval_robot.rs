@@ -1,6 +1,7 @@
 //! `skillc eval --robot NAME` from a folder outside the repository: the touch trials run on the
 //! KUKA LBR iiwa 14 from the built-in defaults (its URDF written to the cache with the rest),
-//! each trial's overrides name the iiwa; an unknown robot is a usage error naming the shipped ones.
+//! each trial's overrides name the iiwa; an unknown robot is a usage error naming the shipped ones;
+//! `skillc robot iiwa14` inspects the shipped robot by name.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -78,5 +79,24 @@ fn an_unknown_robot_is_a_usage_error_naming_the_shipped_ones() {
         stderr.contains("unknown robot `ur5` for --robot (shipped: lwr4, iiwa14)"),
         "{stderr}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `skillc robot NAME` inspects a shipped robot from any folder, with its probe tip as the tool.
+#[test]
+fn robot_inspects_a_shipped_robot_by_name() {
+    let dir = temp_dir("inspect");
+    let out = Command::new(env!("CARGO_BIN_EXE_skillc"))
+        .args(["robot", "iiwa14", "--json"])
+        .current_dir(&dir)
+        .output()
+        .expect("skillc runs");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let inspection: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(inspection["robot"], "kuka_iiwa14");
+    assert_eq!(inspection["tool_link"], "probe_tip");
+    // Stretched straight up: the tip 1.416 m above the base (0.36 + 0.42 + 0.40 + 0.126 + 0.11).
+    let z = inspection["tool_position"][2].as_f64().expect("z");
+    assert!((z - 1.416).abs() < 1e-9, "{z}");
     let _ = std::fs::remove_dir_all(&dir);
 }

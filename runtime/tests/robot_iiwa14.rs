@@ -159,3 +159,20 @@ fn the_iiwa_scenes_are_the_lwr_scenes_with_the_tool_starting_at_the_same_pose() 
         assert!(q[3] < -1.0, "{name}: {q:?}");
     }
 }
+
+/// The iiwa's links (Drake's cylinders, our wrist primitives) start clear of every object in its
+/// scenes: a run cannot begin in an arm-contact reflex.
+#[test]
+fn the_iiwa_starts_clear_of_the_objects_in_its_scenes() {
+    use skill_runtime::sim::{RapierPlant, Scene};
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    for name in ["table", "button", "cylinder", "workcell"] {
+        let scene = Scene::from_file(&root.join(format!("examples/scenes/iiwa14/{name}.toml"))).expect("scene");
+        let plant = RapierPlant::from_scene(&scene).expect("the arm starts outside every object");
+        let (clearance, link, object) = plant.arm_start_clearance().expect("objects");
+        assert!(
+            clearance > 0.05,
+            "{name}: `{link}` starts {clearance} m from `{object}`"
+        );
+    }
+}

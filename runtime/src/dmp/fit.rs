@@ -79,6 +79,27 @@ pub(crate) fn fit_weights(
     }
 }
 
+/// The three-point stencil at sample `k` of times `t` (at least 3): the middle sample and the
+/// weights of the first and of the second derivative (see [`Stencil`]).
+pub(crate) fn stencil_at(t: &[f64], k: usize) -> (usize, [f64; 3], [f64; 3]) {
+    let mid = k.clamp(1, t.len() - 2);
+    let (ta, tb, tc, tk) = (t[mid - 1], t[mid], t[mid + 1], t[k]);
+    let (da, db, dc) = (
+        1.0 / ((ta - tb) * (ta - tc)),
+        1.0 / ((tb - ta) * (tb - tc)),
+        1.0 / ((tc - ta) * (tc - tb)),
+    );
+    (
+        mid,
+        [
+            ((tk - tb) + (tk - tc)) * da,
+            ((tk - ta) + (tk - tc)) * db,
+            ((tk - ta) + (tk - tb)) * dc,
+        ],
+        [2.0 * da, 2.0 * db, 2.0 * dc],
+    )
+}
+
 /// Weights of the three-point stencils for the first and second derivative at every sample of
 /// (possibly irregular) times `t`: the derivative of the quadratic through each sample and its
 /// two neighbours (one-sided at the ends). Computed once and shared by all channels.
@@ -98,20 +119,10 @@ impl Stencil {
             second: Vec::with_capacity(n),
         };
         for k in 0..n {
-            let mid = k.clamp(1, n - 2);
-            let (ta, tb, tc, tk) = (t[mid - 1], t[mid], t[mid + 1], t[k]);
-            let (da, db, dc) = (
-                1.0 / ((ta - tb) * (ta - tc)),
-                1.0 / ((tb - ta) * (tb - tc)),
-                1.0 / ((tc - ta) * (tc - tb)),
-            );
+            let (mid, first, second) = stencil_at(t, k);
             stencil.mid.push(mid);
-            stencil.first.push([
-                ((tk - tb) + (tk - tc)) * da,
-                ((tk - ta) + (tk - tc)) * db,
-                ((tk - ta) + (tk - tb)) * dc,
-            ]);
-            stencil.second.push([2.0 * da, 2.0 * db, 2.0 * dc]);
+            stencil.first.push(first);
+            stencil.second.push(second);
         }
         stencil
     }

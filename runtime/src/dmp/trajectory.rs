@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::basis::Basis;
 use super::canonical::CanonicalSystem;
-use super::fit::{fit_weights, Stencil};
+use super::fit::{fit_weights, stencil_at};
 use super::rollout::DmpRollout;
 use super::{check_times, DmpConfig, DmpError};
 
@@ -96,20 +96,25 @@ impl Dmp {
         let phases: Vec<f64> = times.iter().map(|&t| canonical.phase(t, tau)).collect();
         let fractions: Vec<f64> = times.iter().map(|&t| t / tau).collect();
         let (k, d) = (config.stiffness, config.damping());
-        let (mut dx, mut ddx) = (vec![0.0; n], vec![0.0; n]);
+        // One pass over the samples for all channels: the stencil weights are computed once per
+        // sample and no derivative arrays are stored.
         let mut targets = vec![vec![0.0; n]; channels.len()];
-        let (mut start, mut goal, mut start_velocity) = (Vec::new(), Vec::new(), Vec::new());
-        let stencil = Stencil::new(&times);
-        for (channel, target) in channels.iter().zip(&mut targets) {
-            stencil.apply(channel, &mut dx, &mut ddx);
-            let (x0, g) = (channel[0], channel[n - 1]);
-            for idx in 0..n {
-                let s = phases[idx];
-                target[idx] = (tau * tau * ddx[idx] + d * tau * dx[idx]) / k - (g - channel[idx]) + (g - x0) * s;
+        let start: Vec<f64> = channels.iter().map(|channel| channel[0]).collect();
+        let goal: Vec<f64> = channels.iter().map(|channel| channel[n - 1]).collect();
+        let mut start_velocity = vec![0.0; channels.len()];
+        for idx in 0..n {
+            let (mid, w1, w2) = stencil_at(&times, idx);
+            let s = phases[idx];
+            for (c, (channel, target)) in channels.iter().zip(&mut targets).enumerate() {
+                let (a, b, e) = (channel[mid - 1], channel[mid], channel[mid + 1]);
+                let dx = w1[0] * a + w1[1] * b + w1[2] * e;
+                let ddx = w2[0] * a + w2[1] * b + w2[2] * e;
+                let (x0, g) = (start[c], goal[c]);
+                target[idx] = (tau * tau * ddx + d * tau * dx) / k - (g - channel[idx]) + (g - x0) * s;
+                if idx == 0 {
+                    start_velocity[c] = dx;
+                }
             }
-            start.push(x0);
-            goal.push(g);
-            start_velocity.push(dx[0]);
         }
         let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
         let target_refs: Vec<&[f64]> = targets.iter().map(Vec::as_slice).collect();

@@ -268,7 +268,9 @@ pub fn changepoint(
     }
     // No segment shorter than `min_length_s`, nor than the shortest any candidate model explains.
     let shortest_model = config.models.iter().map(|m| m.min_samples()).min().unwrap_or(2);
-    let alpha = ((config.min_length_s / mean_dt).round() as usize).max(2).max(shortest_model);
+    let alpha = ((config.min_length_s / mean_dt).round() as usize)
+        .max(2)
+        .max(shortest_model);
     if n < alpha {
         return Err(SegmentError::TooFewSamples {
             found: n,

@@ -350,7 +350,10 @@ fn steps_1d(noise: f64, seed: u64) -> (Features, Vec<f64>, Vec<usize>) {
 fn changepoint_without_a_minimum_length_finds_the_true_breaks() {
     // No minimum length in seconds: only the models' own minimum lengths keep the linear model
     // from explaining 2-sample pieces exactly.
-    for models in [vec![SegmentModel::Constant], vec![SegmentModel::Constant, SegmentModel::Linear]] {
+    for models in [
+        vec![SegmentModel::Constant],
+        vec![SegmentModel::Constant, SegmentModel::Linear],
+    ] {
         for seed in 0..3 {
             let (signal, t, breaks) = steps_1d(0.5, 300 + seed);
             let config = ChangepointConfig {

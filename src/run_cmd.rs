@@ -43,6 +43,10 @@ pub struct RunArgs {
     /// Run the baseline instead: the learned motions replayed under pure impedance control.
     #[arg(long)]
     pub replay: bool,
+    /// Start from where the scene puts the arm instead of first moving (guarded) to the
+    /// demonstrated start: what `skillc eval` does, so its trials and sweep draws repeat exactly.
+    #[arg(long)]
+    pub no_prepose: bool,
     /// Multiply every desired force and force threshold.
     #[arg(long, default_value_t = 1.0, value_parser = crate::limits::factor)]
     pub force_scale: f64,
@@ -127,6 +131,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
             goal_offset_m: [0.0; 3],
         },
         limits: args.limits.clone(),
+        prepose: !args.no_prepose,
         ..ExecOptions::default()
     };
     let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
@@ -321,6 +326,7 @@ fn run_task(
         &fallbacks,
         &ExecOptions {
             limits: args.limits.clone(),
+            prepose: !args.no_prepose,
             ..ExecOptions::default()
         },
     )

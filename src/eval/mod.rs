@@ -214,7 +214,7 @@ pub struct TrialResult {
     /// The scene a sweep drew (sweeps only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub draw: Option<sweep::Draw>,
-    /// The scene overrides of the trial (`skillc run --set ...` repeats it).
+    /// The scene overrides of the trial (`skillc run --no-prepose --set ...` repeats it).
     #[serde(default)]
     pub set: Vec<String>,
 }

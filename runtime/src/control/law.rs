@@ -26,12 +26,27 @@ pub struct ControllerGains {
     pub force_axis_damping: f64,
     /// Damping of force-controlled rotations \[N m s/rad\].
     pub force_axis_rotational_damping: f64,
-    /// Speed limit along force-controlled translations \[m/s\]. A force loop that finds no
-    /// resistance (a button's spring, a surface that gave way) accelerates until something stops
-    /// it; what stops it must survive the impact. Hitting a stiff stop at speed `v` peaks near
-    /// `v √(k m)`: with the scene's default contact stiffness (5e4 N/m) and the arm's ~2.5 kg at
-    /// the tool, 25 mm/s keeps that near 9 N, on top of the force the state holds.
+    /// Upper bound of the speed along force-controlled translations \[m/s\]. A force loop that
+    /// finds no resistance (a button's spring, a surface that gave way) accelerates until
+    /// something stops it; what stops it must survive the impact. Hitting a stiff stop at speed
+    /// `v` adds a force peak near `v √(k m)` to what the tool applied: with
+    /// [`ControllerGains::force_axis_stop_stiffness`] and the arm's ~2.5 kg at the tool, 25 mm/s
+    /// adds about 9 N. Below this bound the limit follows the force still missing, see
+    /// [`ControllerGains::force_axis_speed_limit`].
     pub force_axis_speed_mps: f64,
+    /// The force an unforeseen stop may add above the desired one \[N\]: the force-axis speed
+    /// limit never goes below the speed whose impact adds this much (14 mm/s with the defaults),
+    /// which is what a force loop may always move at to follow its surface (a contour over a
+    /// drum moves up to 11-17 mm/s along its normal).
+    pub force_axis_impact_n: f64,
+    /// The arm's effective mass at the tool for the force-axis speed limit \[kg\]; `None` (the
+    /// default) has [`HybridController::new`] take the robot's own along the base z at the rest
+    /// posture (3.7 kg for the LWR-IV's start, 5.4 kg for the iiwa's): a heavier arm hits
+    /// harder at the same speed, so it moves slower.
+    pub force_axis_mass_kg: Option<f64>,
+    /// The stiffness a force loop is assumed to meet when it hits something \[N/m\]: the scenes'
+    /// default contact stiffness (a stop on a real fixture is stiffer: lower the speeds there).
+    pub force_axis_stop_stiffness: f64,
     /// Braking gain on the speed above [`ControllerGains::force_axis_speed_mps`] \[N s/m\]. Kept
     /// below `m / dt` (2500 N s/m for 2.5 kg at 1 kHz; the default is 2000) so the explicit brake cannot overshoot.
     pub force_axis_brake: f64,
@@ -45,6 +60,27 @@ pub struct ControllerGains {
     pub velocity_brake_gain: f64,
 }
 
+impl ControllerGains {
+    /// The speed limit along a force-controlled translation missing `force_error_n` of its
+    /// desired force: the speed at which hitting a stop of stiffness
+    /// [`ControllerGains::force_axis_stop_stiffness`] adds the larger of the missing force and
+    /// [`ControllerGains::force_axis_impact_n`], `max(|e|, F) / √(k m)`, at most
+    /// [`ControllerGains::force_axis_speed_mps`]. A loop far from its force (contact lost, a
+    /// force just switched on) may move fast to find it; one that is nearly there (a button's
+    /// cap travelling against its spring) meets the cap's end stop slowly enough that the peak
+    /// stays within `F` of the desired force.
+    pub fn force_axis_speed_limit(&self, force_error_n: f64, desired_n: f64) -> f64 {
+        let mass = self.force_axis_mass_kg.unwrap_or(self.effective_mass_kg);
+        let impedance = (self.force_axis_stop_stiffness * mass).max(0.0).sqrt();
+        let force = force_error_n.abs().max(desired_n.abs()).max(self.force_axis_impact_n);
+        if impedance > 0.0 && force.is_finite() {
+            (force / impedance).min(self.force_axis_speed_mps)
+        } else {
+            self.force_axis_speed_mps
+        }
+    }
+}
+
 impl Default for ControllerGains {
     fn default() -> Self {
         ControllerGains {
@@ -55,6 +91,9 @@ impl Default for ControllerGains {
             force_axis_damping: 40.0,
             force_axis_rotational_damping: 0.3,
             force_axis_speed_mps: 0.025,
+            force_axis_impact_n: 5.0,
+            force_axis_mass_kg: None,
+            force_axis_stop_stiffness: 5.0e4,
             force_axis_brake: 2000.0,
             nullspace_stiffness: 10.0,
             nullspace_damping: 0.5,
@@ -136,8 +175,16 @@ pub struct HybridController {
 impl HybridController {
     /// A controller for `robot`, reading the wrist sensor at `sensor_link`, with the null space
     /// pulled towards `q_rest`.
-    pub fn new(robot: Robot, sensor_link: &str, q_rest: &[f64], gains: ControllerGains) -> Result<Self, RobotError> {
+    pub fn new(
+        robot: Robot,
+        sensor_link: &str,
+        q_rest: &[f64],
+        mut gains: ControllerGains,
+    ) -> Result<Self, RobotError> {
         robot.check_dof(q_rest.len())?;
+        if gains.force_axis_mass_kg.is_none() {
+            gains.force_axis_mass_kg = robot.tool_effective_mass(q_rest, &Vector3::z());
+        }
         let sensor_link = robot.require_link(sensor_link)?;
         let n = robot.dof();
         let data = robot.data();
@@ -274,21 +321,25 @@ impl HybridController {
         let damping = adg * d_cf * ad_inv;
         let twist_selected = ad * s * ad_inv * cmd.twist;
 
-        // Speed limit on force-controlled translations, in the compliant frame.
+        // Force error, in the compliant frame too.
+        let e_f = cmd.wrench - state.applied;
+        let e_f_cf = adg_inv * e_f;
+
+        // Speed limit on force-controlled translations, in the compliant frame, following the
+        // force each still misses.
         let twist_cf = ad_inv * state.twist;
         let mut brake_cf = Vector6::zeros();
         for axis in 0..3 {
-            let excess = twist_cf[axis].abs() - gains.force_axis_speed_mps;
+            let desired_cf = adg_inv * cmd.wrench;
+            let excess = twist_cf[axis].abs() - gains.force_axis_speed_limit(e_f_cf[axis], desired_cf[axis]);
             if !cmd.position[axis] && excess > 0.0 {
                 brake_cf[axis] = -gains.force_axis_brake * excess * twist_cf[axis].signum();
             }
         }
 
-        // Force error and the saturated integral, kept in compliant-frame coordinates. An axis
-        // held at its speed limit does not integrate (the force it has not reached yet would wind
-        // the integral up and push through the limit).
-        let e_f = cmd.wrench - state.applied;
-        let e_f_cf = adg_inv * e_f;
+        // The saturated integral, kept in compliant-frame coordinates. An axis held at its speed
+        // limit does not integrate (the force it has not reached yet would wind the integral up
+        // and push through the limit).
         for axis in 0..6 {
             if cmd.position[axis] {
                 integral_cf[axis] = 0.0;
@@ -455,6 +506,58 @@ mod tests {
             HybridController::cartesian_wrench(&gains, &state_at(tool, cmd.wrench), &cmd, &mut integral, 0.001);
         assert!((wrench[2] + 10.0).abs() < 1e-9, "{wrench}");
         assert!(integral.norm() < 1e-12);
+    }
+
+    #[test]
+    fn the_force_axis_speed_limit_is_the_speed_whose_impact_adds_the_larger_force() {
+        let gains = ControllerGains {
+            force_axis_mass_kg: Some(3.2),
+            ..ControllerGains::default()
+        };
+        // √(5e4 N/m · 3.2 kg) = 400 N s/m.
+        let at = |error: f64, desired: f64| gains.force_axis_speed_limit(error, desired);
+        assert!(
+            (at(0.0, 0.0) - 5.0 / 400.0).abs() < 1e-12,
+            "the impact floor: 12.5 mm/s"
+        );
+        assert!((at(-0.4, 2.0) - 5.0 / 400.0).abs() < 1e-12);
+        assert!((at(1.0, 8.0) - 8.0 / 400.0).abs() < 1e-12, "the desired force: 20 mm/s");
+        assert!(
+            (at(-7.0, 4.0) - 7.0 / 400.0).abs() < 1e-12,
+            "the missing force, either sign"
+        );
+        assert_eq!(at(30.0, 0.0), gains.force_axis_speed_mps, "capped");
+        assert!((at(f64::NAN, 0.0) - 5.0 / 400.0).abs() < 1e-12, "no reading: the floor");
+        // Without a mass of its own it uses the nominal one.
+        let nominal = ControllerGains::default();
+        let expected = 5.0 / (5.0e4 * nominal.effective_mass_kg).sqrt();
+        assert!((nominal.force_axis_speed_limit(0.0, 0.0) - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_force_axis_brakes_above_its_limit_and_not_below() {
+        // Force control along base z with 8 N desired and 6 N applied: limit max(2, 8, 5) N /
+        // 400 N s/m = 20 mm/s.
+        let gains = ControllerGains {
+            force_axis_mass_kg: Some(3.2),
+            ..ControllerGains::default()
+        };
+        let mut cmd = command(Isometry3::identity(), [true, true, false, true, true, true]);
+        cmd.wrench = Vector6::new(0.0, 0.0, 8.0, 0.0, 0.0, 0.0);
+        let applied = Vector6::new(0.0, 0.0, 6.0, 0.0, 0.0, 0.0);
+        let wrench_at = |speed: f64| {
+            let mut state = state_at(cmd.pose, applied);
+            state.twist[2] = speed;
+            let mut integral = Vector6::zeros();
+            HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 0.001)[2]
+        };
+        let (slow, fast) = (wrench_at(0.019), wrench_at(0.030));
+        // Below the limit: feed-forward, P term and the axis damping only.
+        let expected_slow = 8.0 + 2.0 * cmd.kp - gains.force_axis_damping * 0.019 + 2.0 * 0.001 * cmd.ki;
+        assert!((slow - expected_slow).abs() < 1e-9, "{slow} vs {expected_slow}");
+        // Above it the brake adds −2000 N s/m · (30 − 20) mm/s = −20 N (the integral holds).
+        let expected_fast = 8.0 + 2.0 * cmd.kp - gains.force_axis_damping * 0.030 - gains.force_axis_brake * 0.010;
+        assert!((fast - expected_fast).abs() < 1e-9, "{fast} vs {expected_fast}");
     }
 
     #[test]

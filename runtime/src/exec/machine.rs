@@ -135,6 +135,27 @@ const IN_CONTACT_N: f64 = 1.0;
 /// to the state's own \[s\]: a step in the desired force is a step in the commanded torques.
 pub(super) const FORCE_RAMP_S: f64 = 0.15;
 
+/// The force lag at which a force profile's clock runs at half speed \[N\] (see
+/// [`profile_rate`]): a few times the filtered wrist sensor's noise.
+const PROFILE_STOP_N: f64 = 1.0;
+
+/// How fast a force profile's clock runs while the applied force lags the desired one by
+/// `lag_n`: `1 / (1 + (lag / PROFILE_STOP_N)²)`, the phase stopping of Ijspeert et al. (2013)
+/// with the force error in place of the position error. Half speed at 1 N behind, a tenth at
+/// 3 N. The profile waits for a force the world does not give yet (a button's cap still
+/// travelling, a surface that is farther) instead of running ahead of it and reaching its end,
+/// and its peak, before the tool does: the demonstrated profile keeps its shape in time with
+/// the contact, and its force axis can move slowly (a gentle impact at the cap's end stop)
+/// without the force falling behind the profile.
+fn profile_rate(lag_n: Option<f64>) -> f64 {
+    let lag = lag_n.unwrap_or(0.0);
+    if lag.is_finite() {
+        1.0 / (1.0 + (lag / PROFILE_STOP_N).powi(2))
+    } else {
+        1.0
+    }
+}
+
 /// How a state that expects contact approaches it: within `zone_m` of its motion's goal (flange
 /// positions) the motion's time runs slower, so that the tool moves at most `speed_mps`.
 #[derive(Debug, Clone, Copy)]
@@ -199,6 +220,8 @@ pub(super) struct Sensed {
     applied: Vector6<f64>,
     /// The largest force error over the force-controlled axes (compliant frame), if any.
     force_error_max: Option<f64>,
+    /// The largest force error over the force-controlled translations \[N\], if any.
+    force_lag_n: Option<f64>,
 }
 
 impl Sensed {
@@ -208,7 +231,8 @@ impl Sensed {
         let applied = rig.controller.state().applied;
         Sensed {
             applied,
-            force_error_max: last_cmd.and_then(|cmd| force_error(cmd, &target_force, &applied)),
+            force_error_max: last_cmd.and_then(|cmd| force_error(cmd, &target_force, &applied, 0..6)),
+            force_lag_n: last_cmd.and_then(|cmd| force_error(cmd, &target_force, &applied, 0..3)),
         }
     }
 }
@@ -548,8 +572,9 @@ impl<'b, 'a> Machine<'b, 'a> {
         next
     }
 
-    /// Advances the DMPs and extension by `dt`.
-    pub(super) fn advance(&mut self, dt: f64) -> Result<(), ExecError> {
+    /// Advances the DMPs and extension by `dt`; a force profile's clock runs slower while the
+    /// applied force lags it (see [`profile_rate`]).
+    pub(super) fn advance(&mut self, dt: f64, sensed: &Sensed) -> Result<(), ExecError> {
         if let Some(extension) = &mut self.extension {
             if extension.exhausted_at_s.is_none() {
                 extension.done_m = (extension.done_m + extension.speed_mps * dt).min(extension.max_m);
@@ -595,7 +620,7 @@ impl<'b, 'a> Machine<'b, 'a> {
                     _ => None,
                 });
         if let (Some(profile), Some(dmp)) = (&mut self.force_profile, profile_dmp) {
-            profile.step(dmp, dt);
+            profile.step(dmp, dt * profile_rate(sensed.force_lag_n));
         }
         Ok(())
     }
@@ -689,9 +714,15 @@ fn unit(axis: ir::Axis) -> Vector3<f64> {
     }
 }
 
-/// The largest force error over the force-controlled axes of `cmd`, in the compliant frame,
-/// against `target_force` (the state's own, before any ramp) and the commanded moments.
-fn force_error(cmd: &Command, target_force: &Vector3<f64>, applied: &Vector6<f64>) -> Option<f64> {
+/// The largest force error over the force-controlled axes of `cmd` among `axes` (0-2 forces,
+/// 3-5 moments), in the compliant frame, against `target_force` (the state's own, before any
+/// ramp) and the commanded moments.
+fn force_error(
+    cmd: &Command,
+    target_force: &Vector3<f64>,
+    applied: &Vector6<f64>,
+    axes: std::ops::Range<usize>,
+) -> Option<f64> {
     let rotation = cmd.frame.rotation.inverse();
     let desired = (
         rotation * target_force,
@@ -702,7 +733,7 @@ fn force_error(cmd: &Command, target_force: &Vector3<f64>, applied: &Vector6<f64
         rotation * applied.fixed_rows::<3>(3).into_owned(),
     );
     let mut worst: Option<f64> = None;
-    for axis in 0..6 {
+    for axis in axes {
         if cmd.position[axis] {
             continue;
         }
@@ -725,6 +756,21 @@ mod tests {
         (0..values.len())
             .filter(|&k| timers.update(key, values[k], t0 + k as f64 * 1e-3, duration_s))
             .collect()
+    }
+
+    #[test]
+    fn a_force_profile_runs_slower_the_more_the_force_lags() {
+        assert_eq!(profile_rate(None), 1.0);
+        assert_eq!(profile_rate(Some(0.0)), 1.0);
+        assert!((profile_rate(Some(PROFILE_STOP_N)) - 0.5).abs() < 1e-12);
+        assert!((profile_rate(Some(-3.0 * PROFILE_STOP_N)) - 0.1).abs() < 1e-12);
+        assert_eq!(profile_rate(Some(f64::INFINITY)), 1.0, "no reading: no stopping");
+        let mut last = 1.0;
+        for k in 1..100 {
+            let rate = profile_rate(Some(k as f64 * 0.1));
+            assert!(rate < last && rate > 0.0);
+            last = rate;
+        }
     }
 
     #[test]

@@ -342,7 +342,7 @@ fn skill_loop(
             continue;
         }
 
-        machine.advance(dt)?;
+        machine.advance(dt, &sensed)?;
         let cmd = machine.command(active, rig, t);
         let state_index = log.as_mut().map_or(0, |log| log.state_index(&state.name));
         rig.act(&cmd, state_index, &state.name, log.as_deref_mut(), dt)?;

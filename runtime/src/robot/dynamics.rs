@@ -36,6 +36,26 @@ impl Robot {
         data.zeros = zeros;
     }
 
+    /// The arm's effective mass at the tool point along the unit vector `direction` (base
+    /// frame) at configuration `q`: `1 / (u J_v M⁻¹ J_vᵀ u)` \[kg\], the mass a contact along
+    /// `u` meets. `None` at a singular configuration. Allocates: for set-up, not for a tick.
+    ///
+    /// # Panics
+    /// If `q.len()` differs from [`Robot::dof`].
+    pub fn tool_effective_mass(&self, q: &[f64], direction: &Vector3<f64>) -> Option<f64> {
+        let n = self.dof();
+        let mut data = self.data();
+        self.forward_kinematics(&mut data, q);
+        let mut mass = DMatrix::zeros(n, n);
+        self.mass_matrix(&mut data, &mut mass);
+        let mut jacobian = nalgebra::Matrix6xX::zeros(n);
+        self.tool_jacobian(&data, &mut jacobian);
+        let row = jacobian.fixed_rows::<3>(0).tr_mul(direction);
+        mass.cholesky()
+            .map(|chol| 1.0 / row.dot(&chol.solve(&row)))
+            .filter(|m| m.is_finite() && *m > 0.0)
+    }
+
     /// The joint-space mass matrix M(q) at the configuration of the last
     /// [`Robot::forward_kinematics`] (one Newton-Euler pass per column).
     ///

@@ -153,19 +153,7 @@ const START_SLOP_M: f64 = 1e-4;
 /// `q`: `√(k / m) / 2π` with `m` the arm's effective mass along the base z,
 /// `1 / (J_z M⁻¹ J_zᵀ)`. A singular configuration falls back to 2.5 kg.
 fn static_contact_hz(robot: &Robot, q: &[f64], stiffness: f64) -> f64 {
-    let n = robot.dof();
-    let mut data = robot.data();
-    robot.forward_kinematics(&mut data, q);
-    let mut mass = nalgebra::DMatrix::zeros(n, n);
-    robot.mass_matrix(&mut data, &mut mass);
-    let mut jacobian = nalgebra::Matrix6xX::zeros(n);
-    robot.tool_jacobian(&data, &mut jacobian);
-    let row = jacobian.row(2).transpose();
-    let m_eff = mass
-        .cholesky()
-        .map(|chol| 1.0 / row.dot(&chol.solve(&row)))
-        .filter(|m| m.is_finite() && *m > 0.0)
-        .unwrap_or(2.5);
+    let m_eff = robot.tool_effective_mass(q, &nalgebra::Vector3::z()).unwrap_or(2.5);
     (stiffness / m_eff).sqrt() / (2.0 * std::f64::consts::PI)
 }
 

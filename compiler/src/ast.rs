@@ -162,8 +162,11 @@ pub enum StmtKind {
     Move {
         /// The motion name.
         motion: Ident,
-        /// Whether `from current` was written (it is the only behaviour).
+        /// Whether `from current` was written (the default behaviour).
         from_current: bool,
+        /// Whether `relative` was written: the motion moves as a whole to start at the entry
+        /// pose (its goal moves by the same offset).
+        relative: bool,
     },
     /// `control force z, position x y rx ry rz in FRAME`.
     Control {

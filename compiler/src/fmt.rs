@@ -284,6 +284,9 @@ impl Printer<'_> {
 
 fn statement(stmt: &StmtKind) -> String {
     match stmt {
+        StmtKind::Move {
+            motion, relative: true, ..
+        } => format!("move {} relative", motion.name),
         StmtKind::Move { motion, .. } => format!("move {} from current", motion.name),
         StmtKind::Control { groups, frame } => {
             let groups: Vec<String> = groups

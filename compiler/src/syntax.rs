@@ -196,6 +196,7 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         Rule::lift_off_stmt | Rule::lift_kw => STATEMENTS,
         Rule::off_kw => "`off`",
         Rule::from_current => "`from current`",
+        Rule::move_relative => "`relative`",
         Rule::control_group | Rule::control_mode => "`position` or `force`",
         Rule::axis_set | Rule::all_axes => "axes (`x y z rx ry rz` or `all`)",
         Rule::axis_value => "axes followed by `:`",
@@ -434,9 +435,11 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
     let kind = match rule {
         Rule::move_stmt => {
             let motion = ident(inner.next().expect("grammar: move names a motion"));
+            let start = inner.next().map(|pair| pair.as_rule());
             StmtKind::Move {
                 motion,
-                from_current: inner.next().is_some(),
+                from_current: start == Some(Rule::from_current),
+                relative: start == Some(Rule::move_relative),
             }
         }
         Rule::control_stmt => {

@@ -688,6 +688,11 @@ pub enum Outcome {
 pub struct ActiveState {
     /// The motion run in this state, started from the pose at entry; `None` holds the entry pose.
     pub motion: Option<MotionId>,
+    /// `move M relative`: the motion is moved as a whole so that it starts at the entry pose,
+    /// its goal by the same offset (the demonstrated shape, where the state began); otherwise it
+    /// runs from the entry pose to its demonstrated goal. Left out of the JSON when `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub motion_relative: bool,
     /// The compliant frame in which selection and stiffness are given.
     pub frame: FrameRef,
     /// Per axis (`x y z rx ry rz` of `frame`): position (`true`, S = 1) or force control.

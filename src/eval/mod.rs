@@ -288,11 +288,14 @@ fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
             let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
             (text, path.display().to_string(), base)
         }
-        None => (
-            DEFAULT_TRIALS.to_string(),
-            DEFAULT_TRIALS_PATH.to_string(),
-            crate::defaults::root().map_err(Failure::Usage)?.join("examples/eval"),
-        ),
+        None => {
+            // The root's copy (the repository's, edits included, or the built-in one written
+            // to the cache), the built-in text if it cannot be read.
+            let root = crate::defaults::root().map_err(Failure::Usage)?;
+            let path = root.join(DEFAULT_TRIALS_PATH);
+            let text = std::fs::read_to_string(&path).unwrap_or_else(|_| DEFAULT_TRIALS.to_string());
+            (text, DEFAULT_TRIALS_PATH.to_string(), root.join("examples/eval"))
+        }
     };
     let trials: TrialsFile =
         toml::from_str(&text).map_err(|err| Failure::Input(format!("`{name}`: {}", err.to_string().trim())))?;

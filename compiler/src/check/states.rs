@@ -156,6 +156,7 @@ impl Checker<'_> {
         let errors_before = self.error_count();
         let mut seen: HashMap<&'static str, Span> = HashMap::new();
         let mut motion = None;
+        let mut motion_relative = false;
         let mut frame = ir::FrameRef::Base;
         let mut position_controlled = [true; 6];
         let mut control_span = None;
@@ -200,8 +201,11 @@ impl Checker<'_> {
                 seen.insert(keyword, stmt.span);
             }
             match &stmt.kind {
-                StmtKind::Move { motion: name, .. } => {
+                StmtKind::Move {
+                    motion: name, relative, ..
+                } => {
                     motion = self.resolve(name, SymKind::Motion, scope).map(ir::MotionId);
+                    motion_relative = *relative;
                 }
                 StmtKind::Control {
                     groups,
@@ -334,6 +338,7 @@ impl Checker<'_> {
         }
         Some(ir::ActiveState {
             motion,
+            motion_relative,
             frame,
             position_controlled,
             stiffness,

@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3, Vector6};
 use skill_ir as ir;
 
 use super::bind::BoundSkill;
-use super::motion::{start_profile, MotionRollout};
+use super::motion::{motion_start, start_profile, MotionRollout};
 use super::rig::Rig;
 use super::run::ExecError;
 use crate::control::Command;
@@ -344,7 +344,13 @@ impl<'b, 'a> Machine<'b, 'a> {
             let learned = self.bound.motions[motion_id.index()];
             let lever = rig.flange_to_tool().translation.vector.norm();
             let max_speed = rig.limits().tool_speed_mps;
-            let rollout = MotionRollout::start(learned, &flange, self.overrides.goal_offset_m, speed, max_speed, lever)
+            // `move M relative`: the goal moves by the offset of the entry pose from the
+            // motion's demonstrated start.
+            let mut offset = Vector3::from(self.overrides.goal_offset_m);
+            if active.motion_relative {
+                offset += flange.translation.vector - motion_start(learned).translation.vector;
+            }
+            let rollout = MotionRollout::start(learned, &flange, offset.into(), speed, max_speed, lever)
                 .map_err(|err| self.motion_error(&self.skill().learn.motions[motion_id.index()].name, &err))?;
             self.motion = Some(RunningMotion {
                 id: motion_id.index(),

@@ -87,6 +87,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
         |motion: Option<u32>, position_controlled, force, gains, entry, transitions: &[u32], approach, lift_off| {
             ir::StateKind::Active(Box::new(ir::ActiveState {
                 motion: motion.map(ir::MotionId),
+                motion_relative: false,
                 frame: contact,
                 position_controlled,
                 stiffness,

@@ -36,7 +36,9 @@ pub(crate) const CONTACT_Z: ir::FrameAxis = ir::FrameAxis {
     axis: ir::Axis::Z,
 };
 
-/// What a test changes in the touch. The default is stdlib-skills/touch.skill.
+/// What a test changes in the touch. The default is stdlib-skills/touch.skill, except that its
+/// return runs to the demonstrated goal (`move retreat from current`; the standard one is
+/// `relative`, see tests/relative_motion.rs).
 pub(crate) struct Touch {
     /// The skill's `limits { }`.
     pub(crate) limits: Vec<ir::Limit>,

@@ -1,12 +1,14 @@
 //! Benchmarks of the robot model and the plant: FK + tool Jacobian + gravity over 1024 random
-//! configurations (one per iteration), and rapier steps pressing on a table, with every link's
-//! colliders and with the tool's alone (what the arm's colliders cost).
+//! configurations (one per iteration), and one tick of the plant pressing on a table under the
+//! real `HybridController` (observe, controller, apply, rapier step with contacts and sensor),
+//! with every link's colliders and with the tool's alone (what the arm's colliders cost).
 
 use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use nalgebra::{Matrix6xX, Vector6};
+use nalgebra::{Isometry3, Matrix6xX, Translation3, UnitQuaternion, Vector6};
+use skill_runtime::control::{Command, ControllerGains, HybridController};
 use skill_runtime::plant::{Observation, Plant};
 use skill_runtime::robot::{Robot, LWR4_URDF};
 use skill_runtime::sim::{RapierOptions, RapierPlant, Scene};
@@ -69,39 +71,53 @@ fn sim(c: &mut Criterion) {
     let tool_only = Robot::from_urdf_str(&tool_colliders_only(), Some("probe_tip")).expect("stripped urdf");
     let plants = [
         (
-            "rapier step pressing on table (controller + sensor)",
+            "plant tick pressing on table (HybridController + rapier step + sensor)",
             RapierPlant::from_scene(&scene).expect("scene builds"),
         ),
         (
-            "rapier step pressing on table, tool colliders only",
+            "plant tick pressing on table, tool colliders only",
             RapierPlant::new(tool_only, &scene, RapierOptions::default()).expect("scene builds"),
         ),
     ];
     for (name, mut plant) in plants {
-        let robot = plant.robot().clone();
-        let mut data = robot.data();
-        let mut jacobian = Matrix6xX::zeros(7);
-        let mut gravity = [0.0; 7];
-        let mut tau = [0.0; 7];
+        let q0 = plant.observe().q;
+        let mut controller = HybridController::new(
+            plant.robot().clone(),
+            &scene.spec().robot.sensor,
+            q0.as_slice(),
+            ControllerGains::default(),
+        )
+        .expect("controller");
         let mut obs = Observation::zeros(7);
-        let damping = [8.0, 8.0, 4.0, 4.0, 1.0, 0.5, 0.1];
-        let wrench = Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0);
+        plant.observe_into(&mut obs);
+        controller.observe(&obs);
+        let start = controller.state().tool;
+        // Pressing down with 10 N along the base z, position control on the other axes, the
+        // tool held where it started (over the table): the slide's command without the motion.
+        let mut cmd = Command::hold(start, [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0]);
+        cmd.position = [true, true, false, true, true, true];
+        cmd.wrench = Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0);
+        cmd.kp = 0.5;
+        cmd.ki = 10.0;
+        cmd.integral_limit = Some(10.0);
         let mut tick = |plant: &mut RapierPlant| {
             plant.observe_into(&mut obs);
-            robot.forward_kinematics(&mut data, obs.q.as_slice());
-            robot.tool_jacobian(&data, &mut jacobian);
-            robot.gravity_torques(&mut data, &mut gravity);
-            let push = jacobian.transpose() * wrench;
-            for idx in 0..7 {
-                tau[idx] = gravity[idx] + push[idx] - damping[idx] * obs.qd[idx];
-            }
-            plant.apply(&tau).expect("7 torques");
+            controller.observe(&obs);
+            cmd.frame = Isometry3::from_parts(
+                Translation3::from(controller.state().tool.translation.vector),
+                UnitQuaternion::identity(),
+            );
+            let torques = controller.torques(&obs, &cmd, 1e-3);
+            plant.apply(torques).expect("7 torques");
             plant.step(1e-3).expect("finite");
         };
-        // Get into steady contact first.
-        for _ in 0..500 {
+        // Get into steady contact first (the tool starts above the table and moves down under
+        // force control at the controller's speed limit).
+        for _ in 0..3000 {
             tick(&mut plant);
         }
+        let force = plant.observe().wrench_base.fixed_rows::<3>(0).norm();
+        assert!(force > 5.0, "{name}: pressing on the table, {force:.1} N");
         c.bench_function(name, |b| b.iter(|| tick(&mut plant)));
     }
 }

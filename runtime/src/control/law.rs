@@ -377,15 +377,18 @@ impl HybridController {
             self.posture[i] = -self.gains.nullspace_stiffness * (obs.q[i] - self.q_rest[i])
                 - self.gains.nullspace_damping * obs.qd[i];
         }
-        let jjt = &self.jacobian * self.jacobian.transpose() + Matrix6::identity() * 1e-6;
-        let projected = match jjt.cholesky() {
-            Some(chol) => {
-                let j_posture: Vector6<f64> = Vector6::from_iterator((&self.jacobian * &self.posture).iter().copied());
-                let solved = chol.solve(&j_posture);
-                &self.posture - self.jacobian.transpose() * solved
-            }
-            None => self.posture.clone(),
-        };
+        // Without temporaries (no allocation per tick): J Jᵀ column by column, the projection in place.
+        let mut jjt = Matrix6::identity() * 1e-6;
+        let mut j_posture = Vector6::zeros();
+        for (column, posture) in self.jacobian.column_iter().zip(self.posture.iter()) {
+            jjt += column * column.transpose();
+            j_posture += column * *posture;
+        }
+        if let Some(chol) = jjt.cholesky() {
+            let solved = chol.solve(&j_posture);
+            self.posture.gemv_tr(-1.0, &self.jacobian, &solved, 1.0);
+        }
+        let projected = &self.posture;
 
         for (i, joint) in self.robot.joints().iter().enumerate() {
             let mut tau = self.task_torques[i] + self.gravity[i] + projected[i];

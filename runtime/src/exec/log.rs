@@ -24,9 +24,79 @@ pub struct Tick {
     /// Position-controlled axes as bits (bit i = axis i of `x y z rx ry rz`).
     pub selection: u8,
     /// Commanded joint torques after limits \[N m\].
-    pub torques: Vec<f64>,
+    pub torques: JointValues<MAX_INLINE_DOF>,
     /// Joint positions \[rad\] then joint velocities \[rad/s\], as sensed this tick (2 × dof).
-    pub joint_state: Vec<f64>,
+    pub joint_state: JointValues<{ 2 * MAX_INLINE_DOF }>,
+}
+
+/// Arms with up to this many joints log a tick without allocating (a longer arm's joint values
+/// go to the heap).
+pub const MAX_INLINE_DOF: usize = 8;
+
+/// A tick's joint values: up to `N` stored inline (no allocation per tick), more on the heap.
+/// Reads as a slice (`Deref<Target = [f64]>`).
+#[derive(Clone)]
+pub struct JointValues<const N: usize> {
+    len: usize,
+    inline: [f64; N],
+    heap: Vec<f64>,
+}
+
+impl<const N: usize> JointValues<N> {
+    /// The values of `parts` one after the other (inline if they fit).
+    pub fn from_slices(parts: &[&[f64]]) -> Self {
+        let len = parts.iter().map(|part| part.len()).sum();
+        let mut out = JointValues {
+            len,
+            inline: [0.0; N],
+            heap: Vec::new(),
+        };
+        if len <= N {
+            let values = parts.iter().flat_map(|part| part.iter());
+            for (slot, value) in out.inline.iter_mut().zip(values) {
+                *slot = *value;
+            }
+        } else {
+            out.heap = parts.concat();
+        }
+        out
+    }
+
+    /// The values as a slice.
+    pub fn as_slice(&self) -> &[f64] {
+        if self.len <= N {
+            &self.inline[..self.len]
+        } else {
+            &self.heap
+        }
+    }
+}
+
+impl<const N: usize> std::ops::Deref for JointValues<N> {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        self.as_slice()
+    }
+}
+
+impl<'a, const N: usize> IntoIterator for &'a JointValues<N> {
+    type Item = &'a f64;
+    type IntoIter = std::slice::Iter<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.as_slice().iter()
+    }
+}
+
+impl<const N: usize> PartialEq for JointValues<N> {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl<const N: usize> std::fmt::Debug for JointValues<N> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.as_slice().fmt(f)
+    }
 }
 
 /// Every tick of a run, with the names of the states ticks refer to.
@@ -39,6 +109,11 @@ pub struct RunLog {
 }
 
 impl RunLog {
+    /// Reserves room for `ticks` more ticks, so that recording them does not allocate.
+    pub fn reserve(&mut self, ticks: usize) {
+        self.ticks.reserve(ticks);
+    }
+
     /// The index of a state name, added if new.
     pub fn state_index(&mut self, name: &str) -> u32 {
         match self.states.iter().position(|s| s == name) {

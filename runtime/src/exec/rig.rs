@@ -4,7 +4,7 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
 
-use super::log::{RunLog, Tick};
+use super::log::{JointValues, RunLog, Tick};
 use super::run::{ExecError, ExecOptions};
 use crate::control::{Command, HybridController};
 use crate::plant::{Observation, Plant};
@@ -301,7 +301,7 @@ fn tick_record(
         desired_cf,
         frame_z: [z.x, z.y, z.z],
         selection,
-        torques: torques.to_vec(),
-        joint_state: obs.q.iter().chain(obs.qd.iter()).copied().collect(),
+        torques: JointValues::from_slices(&[torques]),
+        joint_state: JointValues::from_slices(&[obs.q.as_slice(), obs.qd.as_slice()]),
     }
 }

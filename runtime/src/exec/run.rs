@@ -173,7 +173,12 @@ pub fn run_skill(
 ) -> Result<RunReport, ExecError> {
     let start_s = arm_supervisor(bound.learned, &bound.skill.limits, rig, options)?;
     let mut visits = Vec::new();
-    let result = skill_loop(bound, rig, options, log, &mut visits, start_s);
+    let mut log = log;
+    reserve_log(&mut log, options);
+    let result = skill_loop(bound, rig, options, log.as_deref_mut(), &mut visits, start_s);
+    if let Some(log) = log {
+        log.ticks.shrink_to_fit();
+    }
     let location_of = |state: &str| {
         bound
             .skill
@@ -183,6 +188,26 @@ pub fn run_skill(
             .map(|s| location(&s.span))
     };
     finish(result, rig, visits, start_s, location_of)
+}
+
+/// The longest pre-positioning move, hold included \[s\] (`Rig::prepose`: at most 8 s and 0.3 s).
+const PREPOSE_MAX_S: f64 = 8.3;
+/// Runs longer than this many ticks reserve their log only this far (then it grows).
+const MAX_RESERVED_TICKS: usize = 300_000;
+
+/// Reserves the log for the longest run `options` allow (pre-positioning, the run, a reflex
+/// hold), so that no tick reallocates it; the caller shrinks it to its length afterwards.
+fn reserve_log(log: &mut Option<&mut RunLog>, options: &ExecOptions) {
+    if let Some(log) = log.as_deref_mut() {
+        let longest_s = options.max_duration_s + PREPOSE_MAX_S + crate::safety::REFLEX_HOLD_S;
+        let ticks = (longest_s / options.dt_s).ceil() + 2.0;
+        let ticks = if ticks.is_finite() && ticks > 0.0 {
+            (ticks as usize).min(MAX_RESERVED_TICKS)
+        } else {
+            MAX_RESERVED_TICKS
+        };
+        log.reserve(ticks);
+    }
 }
 
 /// Sets the supervisor's limits for a run of `learned` (with the limits its skill declares, if
@@ -364,7 +389,12 @@ pub fn run_replay(
 ) -> Result<RunReport, ExecError> {
     let start_s = arm_supervisor(learned, &[], rig, options)?;
     let mut visits = Vec::new();
-    let result = replay_loop(learned, rig, options, log, &mut visits, start_s);
+    let mut log = log;
+    reserve_log(&mut log, options);
+    let result = replay_loop(learned, rig, options, log.as_deref_mut(), &mut visits, start_s);
+    if let Some(log) = log {
+        log.ticks.shrink_to_fit();
+    }
     finish(result, rig, visits, start_s, |_| None)
 }
 

@@ -506,6 +506,27 @@ impl RapierPlant {
         ))
     }
 
+    /// The first joint whose position or velocity is not finite (what [`Plant::observe_into`]
+    /// would report), without allocating an observation.
+    fn first_non_finite_joint(&self) -> Option<usize> {
+        let (multibody, _) = self.multibody_joints.get(self.joints[0])?;
+        self.joints.iter().position(|handle| {
+            let Some((_, link_id)) = self.multibody_joints.get(*handle) else {
+                return false;
+            };
+            let Some(link) = multibody.link(link_id) else {
+                return false;
+            };
+            let q = f64::from(link.joint.coords()[3]);
+            let qd = multibody
+                .joint_velocity(link)
+                .iter()
+                .next()
+                .map_or(0.0, |v| f64::from(*v));
+            !q.is_finite() || !qd.is_finite()
+        })
+    }
+
     fn apply_joint_torques(&mut self) {
         for handle in &self.links {
             if let Some(rb) = self.bodies.get_mut(*handle) {
@@ -603,9 +624,7 @@ impl Plant for RapierPlant {
         );
         self.t += dt;
         self.sense_contacts(dt);
-        let mut state = Observation::zeros(self.dof());
-        self.observe_into(&mut state);
-        if let Some(idx) = (0..self.dof()).find(|idx| !state.q[*idx].is_finite() || !state.qd[*idx].is_finite()) {
+        if let Some(idx) = self.first_non_finite_joint() {
             return Err(PlantError::NonFinite {
                 t: self.t,
                 joint: self.robot.joints()[idx].name.clone(),

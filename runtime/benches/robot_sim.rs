@@ -116,8 +116,13 @@ fn sim(c: &mut Criterion) {
         for _ in 0..3000 {
             tick(&mut plant);
         }
-        let force = plant.observe().wrench_base.fixed_rows::<3>(0).norm();
+        let state = plant.observe();
+        let force = state.wrench_base.fixed_rows::<3>(0).norm();
         assert!(force > 5.0, "{name}: pressing on the table, {force:.1} N");
+        eprintln!(
+            "{name}: tool force {force:.1} N, arm contact {:.1} N",
+            state.arm_contact_n
+        );
         c.bench_function(name, |b| b.iter(|| tick(&mut plant)));
     }
 }

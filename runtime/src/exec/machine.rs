@@ -63,6 +63,9 @@ pub(super) struct Machine<'b, 'a> {
     clock_rate: f64,
     /// The current state's `for D` guards: since when each one's guard has held.
     hold_timers: HeldTimers,
+    /// Whether each guard of the active state holds this tick (a buffer kept between ticks so
+    /// that choosing allocates nothing).
+    guard_holds: Vec<bool>,
 }
 
 /// Where a held guard (`G for D`) sits: the index of its transition and its place in a
@@ -263,6 +266,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             last_frame_z: Vector3::z(),
             clock_rate: 1.0,
             hold_timers: HeldTimers::default(),
+            guard_holds: Vec::new(),
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -521,16 +525,15 @@ impl<'b, 'a> Machine<'b, 'a> {
         let skill = self.skill();
         // Every guard is evaluated, also after the one that fires, so that held guards see
         // their guards at every tick.
-        let holds: Vec<bool> = active
-            .transitions
-            .iter()
-            .map(|id| {
-                let mut place = (id.index(), 0);
-                self.guard(&skill.transitions[id.index()].guard, sensed, rig, t, &mut place)
-            })
-            .collect();
+        let mut holds = std::mem::take(&mut self.guard_holds);
+        holds.clear();
+        for id in &active.transitions {
+            let mut place = (id.index(), 0);
+            let held = self.guard(&skill.transitions[id.index()].guard, sensed, rig, t, &mut place);
+            holds.push(held);
+        }
         let mut next = None;
-        for (transition_id, holds) in active.transitions.iter().zip(holds) {
+        for (transition_id, &holds) in active.transitions.iter().zip(&holds) {
             let transition = &skill.transitions[transition_id.index()];
             if !holds {
                 continue;
@@ -570,6 +573,7 @@ impl<'b, 'a> Machine<'b, 'a> {
                 }
             }
         }
+        self.guard_holds = holds;
         if let Some(extension) = &mut self.extension {
             if extension.exhausted_at_s.is_none() && extension.done_m >= extension.max_m {
                 extension.exhausted_at_s = Some(t);

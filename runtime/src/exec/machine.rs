@@ -349,11 +349,13 @@ impl<'b, 'a> Machine<'b, 'a> {
             let lever = rig.flange_to_tool().translation.vector.norm();
             let max_speed = rig.limits().tool_speed_mps;
             // `move M relative`: the goal moves by the offset of the entry pose from the
-            // motion's demonstrated start.
-            let mut offset = Vector3::from(self.overrides.goal_offset_m);
-            if active.motion_relative {
-                offset += flange.translation.vector - motion_start(learned).translation.vector;
-            }
+            // motion's demonstrated start. A task step's `goal_offset` is not added again: the
+            // entry pose carries it already (the state began where the offset goals led).
+            let offset = if active.motion_relative {
+                flange.translation.vector - motion_start(learned).translation.vector
+            } else {
+                Vector3::from(self.overrides.goal_offset_m)
+            };
             let rollout = MotionRollout::start(learned, &flange, offset.into(), speed, max_speed, lever)
                 .map_err(|err| self.motion_error(&self.skill().learn.motions[motion_id.index()].name, &err))?;
             self.motion = Some(RunningMotion {

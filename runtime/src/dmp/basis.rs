@@ -120,7 +120,7 @@ impl Basis {
 
     /// The forcing term `Σ wᵢ ψᵢ(s) / Σ ψᵢ(s) · s`, using `scratch`; returns 0 when `weights`
     /// or `scratch` have fewer than [`Basis::len`] entries, and past the last centre, where a
-    /// rollout drops it (see [`Basis::ended`]).
+    /// rollout drops it (the demonstration ends there; see the rollouts).
     pub fn forcing(&self, weights: &[f64], s: f64, scratch: &mut [f64]) -> f64 {
         if weights.len() < self.len()
             || scratch.len() < self.len()

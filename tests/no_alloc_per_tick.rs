@@ -49,6 +49,9 @@ const OUTSIDE_PLANT_PER_TICK: u64 = 0;
 /// the mean over the steps; a step where a contact pair starts allocates its manifolds too (up
 /// to [`RAPIER_PER_STEP_MAX`] measured 16).
 const RAPIER_PER_STEP: f64 = 9.0;
+/// The same in a debug build (`cargo test` without `--release`): rapier 0.36 allocates more
+/// there (measured 11.21 a step on the slide).
+const RAPIER_PER_STEP_DEBUG: f64 = 11.5;
 /// Allocations inside the plant step that starts a contact.
 const RAPIER_PER_STEP_MAX: u64 = 32;
 
@@ -194,7 +197,13 @@ fn check(speed: f64) -> usize {
     );
     let inside_mean = inside_total as f64 / inside.len() as f64;
     assert!(
-        inside_mean <= RAPIER_PER_STEP + 0.05 && inside_max <= RAPIER_PER_STEP_MAX,
+        inside_mean
+            <= if cfg!(debug_assertions) {
+                RAPIER_PER_STEP_DEBUG
+            } else {
+                RAPIER_PER_STEP + 0.05
+            }
+            && inside_max <= RAPIER_PER_STEP_MAX,
         "the plant steps allocated {inside_mean:.2} times a step, at most {inside_max} (rapier's own: \
          {RAPIER_PER_STEP}, at most {RAPIER_PER_STEP_MAX})"
     );

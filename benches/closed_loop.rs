@@ -7,9 +7,10 @@
 //! measured in the same sitting.
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
-use skill_runtime::control::{ControllerGains, HybridController};
-use skill_runtime::exec::{bind, run_skill, simulate, BoundSkill, ExecOptions, Mode, Rig, RunLog, RunReport};
-use skill_runtime::plant::Plant;
+use skill_runtime::control::HybridController;
+use skill_runtime::exec::{
+    bind, run_skill, scene_controller, simulate, BoundSkill, ExecOptions, Mode, Rig, RunLog, RunReport,
+};
 use skill_runtime::sim::{RapierPlant, Scene};
 use skill_runtime::skill::LearnOptions;
 use std::path::PathBuf;
@@ -17,14 +18,7 @@ use std::path::PathBuf;
 /// The plant and controller of a run, built as `simulate` builds them (outside the timed part).
 fn plant_and_controller(scene: &Scene) -> (RapierPlant, Option<HybridController>, RunLog) {
     let plant = RapierPlant::from_scene(scene).expect("plant");
-    let q0 = plant.observe().q;
-    let controller = HybridController::new(
-        plant.robot().clone(),
-        &scene.spec().robot.sensor,
-        q0.as_slice(),
-        ControllerGains::default(),
-    )
-    .expect("controller");
+    let controller = scene_controller(scene, &plant).expect("controller");
     (plant, Some(controller), RunLog::default())
 }
 

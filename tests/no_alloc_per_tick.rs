@@ -18,8 +18,7 @@
 use std::alloc::System;
 use std::path::PathBuf;
 
-use skill_runtime::control::{ControllerGains, HybridController};
-use skill_runtime::exec::{bind, run_skill, ExecOptions, Rig, RunLog};
+use skill_runtime::exec::{bind, run_skill, scene_controller, ExecOptions, Rig, RunLog};
 use skill_runtime::plant::{Observation, Plant, PlantError};
 use skill_runtime::sim::RapierPlant;
 use skill_runtime::skill::LearnOptions;
@@ -118,14 +117,7 @@ fn slide_ticks(speed: f64) -> Ticks {
         panic!("scene")
     };
     let plant = RapierPlant::from_scene(&scene).expect("plant");
-    let q0 = plant.observe().q;
-    let controller = HybridController::new(
-        plant.robot().clone(),
-        &scene.spec().robot.sensor,
-        q0.as_slice(),
-        ControllerGains::default(),
-    )
-    .expect("controller");
+    let controller = scene_controller(&scene, &plant).expect("controller");
     let mut plant = Noting {
         inner: plant,
         counts: Vec::with_capacity(200_000),

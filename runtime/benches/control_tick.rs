@@ -7,6 +7,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector6};
 use skill_runtime::control::{Command, ControllerGains, HybridController};
 use skill_runtime::plant::Observation;
+use skill_runtime::rng::SplitMix64;
 use skill_runtime::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
 use std::hint::black_box;
 
@@ -15,13 +16,8 @@ fn controller_tick(c: &mut Criterion) {
     let q0 = [0.0, -0.5, 0.0, 1.5, 0.0, -1.14, 0.0];
     let mut controller =
         HybridController::new(robot, LWR4_FLANGE, &q0, ControllerGains::default()).expect("controller");
-    let mut state = 0x5eed_u64;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2.0
-    };
+    let mut rng = SplitMix64::new(0x5eed);
+    let mut uniform = move || rng.range(-1.0, 1.0);
     let base_q = [0.01, -0.49, 0.02, 1.51, -0.01, -1.13, 0.02];
     let observations: Vec<Observation> = (0..1024)
         .map(|_| {

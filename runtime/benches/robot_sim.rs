@@ -10,19 +10,15 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Isometry3, Matrix6xX, Translation3, UnitQuaternion, Vector6};
 use skill_runtime::control::{Command, ControllerGains, HybridController};
 use skill_runtime::plant::{Observation, Plant};
+use skill_runtime::rng::SplitMix64;
 use skill_runtime::robot::{Robot, LWR4_URDF};
 use skill_runtime::sim::{RapierOptions, RapierPlant, Scene};
 
 /// 1024 joint configurations drawn uniformly within ±2 rad (±1.9 rad for the wrist) from a
 /// fixed-seed LCG, so that the model tick is timed over many configurations, not one.
 fn random_configurations() -> Vec<[f64; 7]> {
-    let mut state = 0x5eed_u64;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2.0
-    };
+    let mut rng = SplitMix64::new(0x5eed);
+    let mut uniform = move || rng.range(-1.0, 1.0);
     let limits = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0, 1.9];
     (0..1024).map(|_| limits.map(|limit| limit * uniform())).collect()
 }

@@ -329,8 +329,8 @@ impl HybridController {
         // force each still misses.
         let twist_cf = ad_inv * state.twist;
         let mut brake_cf = Vector6::zeros();
+        let desired_cf = adg_inv * cmd.wrench;
         for axis in 0..3 {
-            let desired_cf = adg_inv * cmd.wrench;
             let excess = twist_cf[axis].abs() - gains.force_axis_speed_limit(e_f_cf[axis], desired_cf[axis]);
             if !cmd.position[axis] && excess > 0.0 {
                 brake_cf[axis] = -gains.force_axis_brake * excess * twist_cf[axis].signum();

@@ -232,10 +232,12 @@ impl Sensed {
     /// state's own desired force (`force_reached` waits for it, not for a force on its ramp).
     pub(super) fn of(rig: &Rig<'_>, last_cmd: Option<&Command>, target_force: Vector3<f64>) -> Self {
         let applied = rig.controller.state().applied;
+        let (force_error_max, force_lag_n) =
+            last_cmd.map_or((None, None), |cmd| force_errors(cmd, &target_force, &applied));
         Sensed {
             applied,
-            force_error_max: last_cmd.and_then(|cmd| force_error(cmd, &target_force, &applied, 0..6)),
-            force_lag_n: last_cmd.and_then(|cmd| force_error(cmd, &target_force, &applied, 0..3)),
+            force_error_max,
+            force_lag_n,
         }
     }
 }
@@ -726,15 +728,10 @@ fn unit(axis: ir::Axis) -> Vector3<f64> {
     }
 }
 
-/// The largest force error over the force-controlled axes of `cmd` among `axes` (0-2 forces,
-/// 3-5 moments), in the compliant frame, against `target_force` (the state's own, before any
-/// ramp) and the commanded moments.
-fn force_error(
-    cmd: &Command,
-    target_force: &Vector3<f64>,
-    applied: &Vector6<f64>,
-    axes: std::ops::Range<usize>,
-) -> Option<f64> {
+/// The largest force error over the force-controlled axes of `cmd`, in the compliant frame,
+/// against `target_force` (the state's own, before any ramp) and the commanded moments: over all
+/// of them, and over the translations only \[N\] (`None` where no such axis is force-controlled).
+fn force_errors(cmd: &Command, target_force: &Vector3<f64>, applied: &Vector6<f64>) -> (Option<f64>, Option<f64>) {
     let rotation = cmd.frame.rotation.inverse();
     let desired = (
         rotation * target_force,
@@ -744,19 +741,24 @@ fn force_error(
         rotation * applied.fixed_rows::<3>(0).into_owned(),
         rotation * applied.fixed_rows::<3>(3).into_owned(),
     );
-    let mut worst: Option<f64> = None;
-    for axis in axes {
-        if cmd.position[axis] {
-            continue;
-        }
-        let error = if axis < 3 {
-            desired.0[axis] - measured.0[axis]
-        } else {
-            desired.1[axis - 3] - measured.1[axis - 3]
-        };
-        worst = Some(worst.map_or(error.abs(), |w: f64| w.max(error.abs())));
-    }
-    worst
+    let worst = |axes: std::ops::Range<usize>| {
+        axes.filter(|&axis| !cmd.position[axis])
+            .map(|axis| {
+                if axis < 3 {
+                    (desired.0[axis] - measured.0[axis]).abs()
+                } else {
+                    (desired.1[axis - 3] - measured.1[axis - 3]).abs()
+                }
+            })
+            .reduce(f64::max)
+    };
+    let forces = worst(0..3);
+    let moments = worst(3..6);
+    let all = match (forces, moments) {
+        (Some(f), Some(m)) => Some(f.max(m)),
+        (f, m) => f.or(m),
+    };
+    (all, forces)
 }
 
 #[cfg(test)]

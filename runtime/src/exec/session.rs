@@ -42,12 +42,21 @@ pub fn simulate(scene: &Scene, mode: Mode<'_, '_>, options: &ExecOptions) -> Res
 /// configuration) and the rig, and hands the rig to `run`.
 fn with_rig<T>(scene: &Scene, run: impl FnOnce(&mut Rig<'_>) -> Result<T, SessionError>) -> Result<T, SessionError> {
     let mut plant = RapierPlant::from_scene(scene)?;
-    let spec = scene.spec();
-    let robot = plant.robot().clone();
-    let q0 = plant.observe().q;
-    let controller = HybridController::new(robot, &spec.robot.sensor, q0.as_slice(), ControllerGains::default())?;
-    let mut rig = Rig::new(&mut plant, controller, &spec.robot.sensor)?;
+    let controller = scene_controller(scene, &plant)?;
+    let mut rig = Rig::new(&mut plant, controller, &scene.spec().robot.sensor)?;
     run(&mut rig)
+}
+
+/// The controller [`simulate`] runs `plant` (built from `scene`) with: default gains, the
+/// scene's wrist sensor, the null space pulled towards the start configuration.
+pub fn scene_controller(scene: &Scene, plant: &RapierPlant) -> Result<HybridController, RobotError> {
+    let q0 = plant.observe().q;
+    HybridController::new(
+        plant.robot().clone(),
+        &scene.spec().robot.sensor,
+        q0.as_slice(),
+        ControllerGains::default(),
+    )
 }
 
 fn simulate_on(

@@ -93,7 +93,9 @@ pub enum Command {
     /// Learn a skill template's features from one demonstration.
     #[command(after_help = "Examples:
   skillc learn stdlib-skills/press.skill examples/demos/press.csv -o press.learned.json
-  skillc learn my.skill demo.csv -o my.learned.json --skill wipe --lowpass 20")]
+  skillc learn my.skill demo.csv -o my.learned.json --skill wipe --lowpass 20
+  skillc learn stdlib-skills/press.skill press.mcap -o press.learned.json --pose-topic /tool_pose --wrench-topic /wrench
+  skillc learn stdlib-skills/press.skill bag.mcap -o press.learned.json --tf-parent base --tf-child tool0")]
     Learn(crate::learn_cmd::LearnArgs),
     /// The kinematic rollout of a learned file's motions, in the demonstration's CSV columns.
     #[command(after_help = "Examples:
@@ -104,6 +106,7 @@ pub enum Command {
     #[command(after_help = "Examples:
   skillc run stdlib-skills/slide.skill --demo examples/demos/slide.csv --scene examples/scenes/table.toml --set table.z=0.195
   skillc run stdlib-skills/press.skill --learned press.learned.json --scene examples/scenes/button.toml -o press.log.csv
+  skillc run stdlib-skills/press.skill --learned press.learned.json --scene examples/scenes/button.toml -o press.log.mcap
   skillc run stdlib-skills/slide.skill --learned slide.learned.json --scene examples/scenes/table.toml --replay")]
     Run(crate::run_cmd::RunArgs),
     /// Run the thesis's experiments: learn each skill, reproduce it in changed scenes beside the

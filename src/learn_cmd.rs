@@ -1,4 +1,4 @@
-//! `skillc learn SKILL DEMO.csv -o OUT.learned.json` and `skillc rollout`: learning a template's
+//! `skillc learn SKILL DEMO.csv|DEMO.mcap -o OUT.learned.json` and `skillc rollout`: learning a template's
 //! features from one demonstration, and previewing what was learned.
 
 use std::collections::BTreeMap;
@@ -9,7 +9,7 @@ use skill_runtime::demo::{Dialect, ForceSign, WrenchDeclaration, WrenchFrame, CO
 use skill_runtime::exec::bind;
 use skill_runtime::skill::{LearnOptions, Learned, LearnedForce, LearnedFrame};
 
-use crate::load::{learn_from_demo, load_skill, read_learned, Failure};
+use crate::load::{learn_from_source, load_skill, read_learned, Failure};
 use crate::out::{self, Verbosity};
 use crate::plot::{self, Plot, Subject};
 use crate::{atomic, limits};
@@ -19,8 +19,10 @@ use crate::{atomic, limits};
 pub struct LearnArgs {
     /// The `.skill` file.
     pub skill_file: PathBuf,
-    /// The demonstration CSV (columns t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz;
-    /// separated by commas, semicolons, tabs or bars, detected from the header line).
+    /// The demonstration: CSV (columns t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz;
+    /// separated by commas, semicolons, tabs or bars, detected from the header line), or a ROS 2
+    /// bag as MCAP (`.mcap`: a PoseStamped topic or TF, and a WrenchStamped topic, the wrench
+    /// linearly interpolated onto the pose's times).
     pub demo: PathBuf,
     /// Where to write the learned features (JSON, written atomically).
     #[arg(short, long)]
@@ -69,6 +71,20 @@ pub struct LearnArgs {
     /// may lean from a fitted plane's normal (atan µ); beyond it z follows the applied force.
     #[arg(long, value_name = "MU", value_parser = parse_friction)]
     pub friction: Option<f64>,
+    /// MCAP: the `geometry_msgs/PoseStamped` topic with the flange pose in the base frame
+    /// (default: the file's only PoseStamped topic, else TF).
+    #[arg(long, value_name = "TOPIC")]
+    pub pose_topic: Option<String>,
+    /// MCAP: the `geometry_msgs/WrenchStamped` topic (default: the file's only one). Its header
+    /// frame declares the wrench's axes when it names the pose's base frame or the TF tool frame.
+    #[arg(long, value_name = "TOPIC")]
+    pub wrench_topic: Option<String>,
+    /// MCAP: read the pose from TF (`tf2_msgs/TFMessage`), the transform from this base frame.
+    #[arg(long, value_name = "FRAME")]
+    pub tf_parent: Option<String>,
+    /// MCAP: read the pose from TF, the transform to this tool frame (one direct transform, not a chain).
+    #[arg(long, value_name = "FRAME")]
+    pub tf_child: Option<String>,
     /// Also draw what was learned into this folder (SVG): the demonstration against the
     /// rollout with segments and frames, forces in the world and compliant frames.
     #[arg(long, value_name = "DIR")]
@@ -172,11 +188,20 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
         delimiter: args.delimiter,
         columns: args.columns.clone().unwrap_or_default(),
     };
-    let learned = learn_from_demo(&skill, &args.demo, &dialect, &options, args.applied_force)?;
+    let bag = crate::ros::BagOptions {
+        pose_topic: args.pose_topic.clone(),
+        wrench_topic: args.wrench_topic.clone(),
+        tf_parent: args.tf_parent.clone(),
+        tf_child: args.tf_child.clone(),
+    };
+    let (learned, provenance) = learn_from_source(&skill, &args.demo, &dialect, &bag, &options, args.applied_force)?;
     let json = serde_json::to_string_pretty(&learned).map_err(|err| Failure::Usage(err.to_string()))? + "\n";
     atomic::write(&args.output, json.as_bytes())
         .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", args.output.display())))?;
     let mut out = summary(&learned);
+    if let Some(provenance) = provenance {
+        out = out.replacen('\n', &format!("\n  {provenance}\n"), 1);
+    }
     let _ = writeln!(out, "wrote `{}`", args.output.display());
     if let Some(dir) = &args.plot {
         std::fs::create_dir_all(dir)
@@ -299,6 +324,20 @@ pub fn summary(learned: &Learned) -> String {
             position * 1e3,
             rotation.to_degrees()
         );
+        if let Some(quality) = quality.filter(|q| !q.strokes_s.is_empty()) {
+            let times: Vec<String> = quality
+                .strokes_s
+                .iter()
+                .map(|[start, end]| format!("{start:.2}-{end:.2}"))
+                .collect();
+            let _ = writeln!(
+                out,
+                "  {:<10} {} stroke(s) at {} s (the worst stroke's RMS above)",
+                "",
+                quality.strokes_s.len(),
+                times.join(", ")
+            );
+        }
     }
     if !learned.forces.is_empty() {
         let _ = writeln!(out, "forces:");

@@ -15,6 +15,7 @@ pub mod plot;
 pub mod profile;
 pub mod render;
 pub mod robot_cmd;
+pub mod ros;
 pub mod run_cmd;
 
 pub use cli::{run, Cli};

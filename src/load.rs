@@ -5,11 +5,12 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use skill_runtime::demo::{read_csv_as, DemoError, Dialect, ForceSign, ReadOptions};
+use skill_runtime::demo::{read_csv_as, DemoError, Dialect, ForceSign, Loaded, ReadOptions};
 use skill_runtime::sim::{Scene, SceneError};
 use skill_runtime::skill::validate::InvalidLearned;
 use skill_runtime::skill::{learn_skill, LearnOptions, Learned, LEARNED_VERSION};
 
+use crate::ros::BagOptions;
 use crate::{frontend, limits, render};
 
 /// Why a command failed: a problem with the input (exit 1) or with usage or IO (exit 2), or
@@ -112,10 +113,7 @@ pub fn learn_from_file(
     learn_from_demo(skill, demo_path, &Dialect::default(), options, applied_force)
 }
 
-/// Like [`learn_from_file`], reading the CSV in `dialect` (separator, column names). Every number
-/// that sizes the work is bounded first (the template's `resample`, `lowpass` and `expect`, the
-/// demonstration's duration and resampled length), and the result is validated before it is
-/// returned, so nothing unusable is ever written.
+/// Like [`learn_from_file`], reading the CSV in `dialect` (separator, column names).
 pub fn learn_from_demo(
     skill: &skill_ir::Skill,
     demo_path: &Path,
@@ -123,6 +121,73 @@ pub fn learn_from_demo(
     options: &LearnOptions,
     applied_force: bool,
 ) -> Result<Learned, Failure> {
+    learn_from_source(
+        skill,
+        demo_path,
+        dialect,
+        &BagOptions::default(),
+        options,
+        applied_force,
+    )
+    .map(|(learned, _)| learned)
+}
+
+/// Reads a demonstration: an MCAP file (a ROS 2 bag, by the extension `.mcap`) through
+/// [`crate::ros::read_demo`] with the topics of `bag`, else CSV in `dialect`. Returns it with
+/// the reader's notes (as warnings) and, for a bag, where the pose and wrench came from.
+pub fn read_demo(
+    path: &Path,
+    dialect: &Dialect,
+    bag: &BagOptions,
+) -> Result<(Loaded, Vec<String>, Option<String>), Failure> {
+    if crate::ros::is_mcap(path) {
+        return read_bag(path, bag);
+    }
+    let loaded = read_csv_as(path, &ReadOptions::default(), dialect).map_err(|err| match &err {
+        // A file that cannot be read is an IO error; one that is not UTF-8 text is bad input.
+        DemoError::Io { source, .. } if source.kind() != std::io::ErrorKind::InvalidData => {
+            Failure::Usage(error_chain(&err))
+        }
+        _ => Failure::Input(error_chain(&err)),
+    })?;
+    Ok((loaded, Vec::new(), None))
+}
+
+#[cfg(feature = "mcap")]
+fn read_bag(path: &Path, bag: &BagOptions) -> Result<(Loaded, Vec<String>, Option<String>), Failure> {
+    use crate::ros::BagError;
+    let read = crate::ros::read_demo(path, bag).map_err(|err| match &err {
+        BagError::Io { .. } => Failure::Usage(error_chain(&err)),
+        _ => Failure::Input(error_chain(&err)),
+    })?;
+    let provenance = format!(
+        "pose from {}, wrench from topic `{}` interpolated onto the pose's times",
+        read.pose_source, read.wrench_topic
+    );
+    Ok((read.loaded, read.notes, Some(provenance)))
+}
+
+#[cfg(not(feature = "mcap"))]
+fn read_bag(path: &Path, _bag: &BagOptions) -> Result<(Loaded, Vec<String>, Option<String>), Failure> {
+    Err(Failure::Usage(format!(
+        "`{}` is an MCAP file, and this skillc was built without the `mcap` feature: build it with default features",
+        path.display()
+    )))
+}
+
+/// Like [`learn_from_demo`], reading an MCAP file's topics as `bag` says; also returns where a
+/// bag's pose and wrench came from. Every number that sizes the work is bounded first (the
+/// template's `resample`, `lowpass` and `expect`, the demonstration's duration and resampled
+/// length), and the result is validated before it is returned, so nothing unusable is ever
+/// written.
+pub fn learn_from_source(
+    skill: &skill_ir::Skill,
+    demo_path: &Path,
+    dialect: &Dialect,
+    bag: &BagOptions,
+    options: &LearnOptions,
+    applied_force: bool,
+) -> Result<(Learned, Option<String>), Failure> {
     let plan = &skill.learn;
     let name = &skill.name;
     if plan.segments > limits::SEGMENTS {
@@ -144,13 +209,7 @@ pub fn learn_from_demo(
             limits::check(flag, value, limits::RATE_HZ, " Hz").map_err(Failure::Usage)?;
         }
     }
-    let loaded = read_csv_as(demo_path, &ReadOptions::default(), dialect).map_err(|err| match &err {
-        // A file that cannot be read is an IO error; one that is not UTF-8 text is bad input.
-        DemoError::Io { source, .. } if source.kind() != std::io::ErrorKind::InvalidData => {
-            Failure::Usage(error_chain(&err))
-        }
-        _ => Failure::Input(error_chain(&err)),
-    })?;
+    let (loaded, notes, provenance) = read_demo(demo_path, dialect, bag)?;
     let file = demo_path.display();
     let samples = loaded.demo.len();
     let needed = (plan.segments as usize * 5).max(10);
@@ -176,7 +235,8 @@ pub fn learn_from_demo(
             )));
         }
     }
-    let warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    let mut warnings: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+    warnings.extend(notes);
     // The wrench's frame and sign: the flags' declarations over the file's, the rest detected.
     let mut options = options.clone();
     if applied_force {
@@ -197,7 +257,7 @@ pub fn learn_from_demo(
             "what skill `{name}` learned from `{file}` is unusable, so nothing is written: {err} (are the demonstration's values in metres, newtons and seconds?)"
         ))
     })?;
-    Ok(learned)
+    Ok((learned, provenance))
 }
 
 /// Learned files larger than this are refused before reading, in bytes.

@@ -8,7 +8,6 @@ use std::path::Path;
 use nalgebra::{Isometry3, Vector3};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
-use skill_runtime::demo::{read_csv, ReadOptions};
 use skill_runtime::exec::{BoundSkill, RunLog};
 use skill_runtime::robot::{Robot, LWR4_FLANGE, LWR4_TOOL, LWR4_URDF};
 use skill_runtime::skill::Learned;
@@ -160,9 +159,13 @@ fn draw_legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> DrawResult {
 
 /// The demonstration a plot draws, read as `skillc learn` reads it.
 fn read_demo(path: &Path) -> Result<skill_runtime::demo::Demo, String> {
-    read_csv(path, &ReadOptions::default())
-        .map(|loaded| loaded.demo)
-        .map_err(|e| e.to_string())
+    let bag = crate::ros::BagOptions::default();
+    crate::load::read_demo(path, &Default::default(), &bag)
+        .map(|(loaded, _, _)| loaded.demo)
+        .map_err(|failure| match failure {
+            crate::load::Failure::Input(message) | crate::load::Failure::Usage(message) => message,
+            crate::load::Failure::Closed => String::new(),
+        })
 }
 
 /// Ticks after pre-positioning, every `stride`.

@@ -24,7 +24,8 @@ pub struct RunArgs {
     /// The learned file (from `skillc learn`); tasks name their own inputs.
     #[arg(long, conflicts_with = "demo")]
     pub learned: Option<PathBuf>,
-    /// Learn from this demonstration first instead of reading a learned file.
+    /// Learn from this demonstration first instead of reading a learned file (CSV, or MCAP with
+    /// its pose and wrench topics found by type).
     #[arg(long)]
     pub demo: Option<PathBuf>,
     /// The scene (TOML).
@@ -33,7 +34,8 @@ pub struct RunArgs {
     /// Change a scene value, e.g. `--set table.z=0.195` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-    /// Write every control tick to this CSV file.
+    /// Write every control tick to this file: CSV, or a ROS 2 bag when it ends in `.mcap`
+    /// (/joint_states, /tool_pose, /desired_pose, /wrench, /skill_state; see the README).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Also draw the run into this folder (SVG): tool path against the demonstration, force
@@ -142,8 +144,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     };
     let (report, log) = simulate(&scene, mode, &options).map_err(|err| Failure::Input(error_chain(&err)))?;
     if let Some(path) = &args.output {
-        atomic::write(path, log.to_csv().as_bytes())
-            .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
+        write_log(path, &[(None, &log)], &scene, || log.to_csv())?;
     }
     let mut text = summary(&skill.name, args.replay, &report, &log);
     if let Some(path) = &args.output {
@@ -153,6 +154,49 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         plot_run(dir, demo, &bound, args.replay, &log, &mut text)?;
     }
     Ok((report, text))
+}
+
+/// Writes a run's log to `path` (atomically): MCAP when the path ends in `.mcap`, with the scene
+/// robot's joint names, else the CSV `csv` makes.
+fn write_log(
+    path: &Path,
+    logs: &[(Option<&str>, &RunLog)],
+    scene: &skill_runtime::sim::Scene,
+    csv: impl FnOnce() -> String,
+) -> Result<(), Failure> {
+    let bytes = if crate::ros::is_mcap(path) {
+        mcap_log(path, logs, scene)?
+    } else {
+        csv().into_bytes()
+    };
+    atomic::write(path, &bytes).map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))
+}
+
+#[cfg(feature = "mcap")]
+fn mcap_log(
+    path: &Path,
+    logs: &[(Option<&str>, &RunLog)],
+    scene: &skill_runtime::sim::Scene,
+) -> Result<Vec<u8>, Failure> {
+    // The names are a courtesy for viewers: without them the joints are called joint_1...
+    let names: Vec<String> =
+        skill_runtime::robot::Robot::from_urdf_file(&scene.urdf_path(), scene.spec().robot.tool.as_deref())
+            .map(|robot| robot.joints().iter().map(|joint| joint.name.clone()).collect())
+            .unwrap_or_default();
+    crate::ros::write_run_log(logs, &names)
+        .map_err(|err| Failure::Usage(format!("cannot write `{}`: {}", path.display(), error_chain(&err))))
+}
+
+#[cfg(not(feature = "mcap"))]
+fn mcap_log(
+    path: &Path,
+    _logs: &[(Option<&str>, &RunLog)],
+    _scene: &skill_runtime::sim::Scene,
+) -> Result<Vec<u8>, Failure> {
+    Err(Failure::Usage(format!(
+        "cannot write `{}`: this skillc was built without the `mcap` feature",
+        path.display()
+    )))
 }
 
 /// Draws the eval's plots for one run.
@@ -332,8 +376,12 @@ fn run_task(
     )
     .map_err(|err| Failure::Input(error_chain(&err)))?;
     if let Some(path) = &args.output {
-        atomic::write(path, run.to_csv().as_bytes())
-            .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
+        let logs: Vec<(Option<&str>, &RunLog)> = run
+            .steps
+            .iter()
+            .map(|step| (Some(step.step.as_str()), &step.log))
+            .collect();
+        write_log(path, &logs, &scene, || run.to_csv())?;
     }
     let mut text = String::new();
     let _ = writeln!(text, "task `{}`: {} step(s)", task.name, run.steps.len());

@@ -13,7 +13,6 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use skill_runtime::demo::{read_csv, ReadOptions};
 use skill_runtime::exec::{bind, simulate, BoundSkill, ExecOptions, Mode, RunLog};
 use skill_runtime::skill::{LearnOptions, Learned};
 
@@ -323,8 +322,8 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
         Err(Failure::Input(message) | Failure::Usage(message)) => (fallback_name, Err(message)),
         Err(Failure::Closed) => (fallback_name, Err("standard output closed".to_string())),
     };
-    let demo_peak_n = read_csv(&demo, &ReadOptions::default())
-        .map(|loaded| loaded.demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max))
+    let demo_peak_n = crate::load::read_demo(&demo, &Default::default(), &Default::default())
+        .map(|(loaded, _, _)| loaded.demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max))
         .unwrap_or(0.0);
     Prepared {
         name,

@@ -1,0 +1,436 @@
+//! The ROS 2 message types skillc reads and writes, their CDR encoding and decoding, and the
+//! `ros2msg` definition texts registered as MCAP schemas (written in our words: the field lists
+//! of the standard packages, each dependency appended after a line of `=` and `MSG: pkg/Type`,
+//! as rosbag2 writes them).
+
+use super::cdr::{CdrError, CdrReader, CdrWriter};
+
+/// `builtin_interfaces/Time`: seconds and nanoseconds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Time {
+    /// Whole seconds.
+    pub sec: i32,
+    /// Nanoseconds, 0 to 999 999 999.
+    pub nanosec: u32,
+}
+
+impl Time {
+    /// The time in nanoseconds.
+    pub fn nanos(self) -> i64 {
+        i64::from(self.sec) * 1_000_000_000 + i64::from(self.nanosec)
+    }
+
+    /// `t_s` seconds (rounded to the nanosecond; clamped to what `int32` seconds hold).
+    pub fn from_seconds(t_s: f64) -> Time {
+        let ns = (t_s * 1e9).round().clamp(i32::MIN as f64 * 1e9, i32::MAX as f64 * 1e9) as i64;
+        Time {
+            sec: ns.div_euclid(1_000_000_000) as i32,
+            nanosec: ns.rem_euclid(1_000_000_000) as u32,
+        }
+    }
+}
+
+/// `std_msgs/Header`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Header {
+    /// When the data was taken.
+    pub stamp: Time,
+    /// The frame the data is written in.
+    pub frame_id: String,
+}
+
+/// `geometry_msgs/PoseStamped`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PoseStamped {
+    /// Stamp and parent frame.
+    pub header: Header,
+    /// Position \[m\].
+    pub position: [f64; 3],
+    /// Orientation as ROS writes it: `[x, y, z, w]`.
+    pub orientation_xyzw: [f64; 4],
+}
+
+/// `geometry_msgs/WrenchStamped`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct WrenchStamped {
+    /// Stamp and the frame whose axes the wrench is written in.
+    pub header: Header,
+    /// Force \[N\].
+    pub force: [f64; 3],
+    /// Torque \[N m\].
+    pub torque: [f64; 3],
+}
+
+/// `geometry_msgs/TransformStamped`: the pose of `child_frame_id` in `header.frame_id`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TransformStamped {
+    /// Stamp and parent frame.
+    pub header: Header,
+    /// The child frame.
+    pub child_frame_id: String,
+    /// Translation \[m\].
+    pub translation: [f64; 3],
+    /// Rotation `[x, y, z, w]`.
+    pub rotation_xyzw: [f64; 4],
+}
+
+/// `sensor_msgs/JointState`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct JointState {
+    /// Stamp (frame unused).
+    pub header: Header,
+    /// Joint names.
+    pub name: Vec<String>,
+    /// Positions \[rad\].
+    pub position: Vec<f64>,
+    /// Velocities \[rad/s\].
+    pub velocity: Vec<f64>,
+    /// Efforts \[N m\].
+    pub effort: Vec<f64>,
+}
+
+/// The types skillc knows, by their MCAP schema names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum MsgType {
+    /// `geometry_msgs/msg/PoseStamped`.
+    PoseStamped,
+    /// `geometry_msgs/msg/WrenchStamped`.
+    WrenchStamped,
+    /// `tf2_msgs/msg/TFMessage`.
+    TfMessage,
+    /// `sensor_msgs/msg/JointState`.
+    JointState,
+    /// `std_msgs/msg/String`.
+    String,
+}
+
+impl MsgType {
+    /// The schema name rosbag2 writes: `pkg/msg/Type`.
+    pub fn schema_name(self) -> &'static str {
+        match self {
+            MsgType::PoseStamped => "geometry_msgs/msg/PoseStamped",
+            MsgType::WrenchStamped => "geometry_msgs/msg/WrenchStamped",
+            MsgType::TfMessage => "tf2_msgs/msg/TFMessage",
+            MsgType::JointState => "sensor_msgs/msg/JointState",
+            MsgType::String => "std_msgs/msg/String",
+        }
+    }
+
+    /// The type a schema name means (`pkg/msg/Type` or `pkg/Type`), if skillc knows it.
+    pub fn from_schema_name(name: &str) -> Option<MsgType> {
+        let short = name.trim().replace("/msg/", "/");
+        [
+            MsgType::PoseStamped,
+            MsgType::WrenchStamped,
+            MsgType::TfMessage,
+            MsgType::JointState,
+            MsgType::String,
+        ]
+        .into_iter()
+        .find(|ty| ty.schema_name().replace("/msg/", "/") == short)
+    }
+
+    /// The `ros2msg` definition: the type's fields, then each type it uses after a separator.
+    pub fn definition(self) -> String {
+        let (own, deps): (&str, &[&str]) = match self {
+            MsgType::PoseStamped => (
+                "std_msgs/Header header\ngeometry_msgs/Pose pose\n",
+                &[
+                    "std_msgs/Header",
+                    "builtin_interfaces/Time",
+                    "geometry_msgs/Pose",
+                    "geometry_msgs/Point",
+                    "geometry_msgs/Quaternion",
+                ],
+            ),
+            MsgType::WrenchStamped => (
+                "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n",
+                &[
+                    "std_msgs/Header",
+                    "builtin_interfaces/Time",
+                    "geometry_msgs/Wrench",
+                    "geometry_msgs/Vector3",
+                ],
+            ),
+            MsgType::TfMessage => (
+                "geometry_msgs/TransformStamped[] transforms\n",
+                &[
+                    "geometry_msgs/TransformStamped",
+                    "std_msgs/Header",
+                    "builtin_interfaces/Time",
+                    "geometry_msgs/Transform",
+                    "geometry_msgs/Vector3",
+                    "geometry_msgs/Quaternion",
+                ],
+            ),
+            MsgType::JointState => (
+                "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
+                &["std_msgs/Header", "builtin_interfaces/Time"],
+            ),
+            MsgType::String => ("string data\n", &[]),
+        };
+        let mut text = own.to_owned();
+        for dep in deps {
+            text.push_str(&"=".repeat(80));
+            text.push_str("\nMSG: ");
+            text.push_str(dep);
+            text.push('\n');
+            text.push_str(fields_of(dep));
+        }
+        text
+    }
+}
+
+/// The fields of a type that the definitions above depend on.
+fn fields_of(ty: &str) -> &'static str {
+    match ty {
+        "std_msgs/Header" => "builtin_interfaces/Time stamp\nstring frame_id\n",
+        "builtin_interfaces/Time" => "int32 sec\nuint32 nanosec\n",
+        "geometry_msgs/Pose" => "geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n",
+        "geometry_msgs/Point" | "geometry_msgs/Vector3" => "float64 x\nfloat64 y\nfloat64 z\n",
+        "geometry_msgs/Quaternion" => "float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n",
+        "geometry_msgs/Wrench" => "geometry_msgs/Vector3 force\ngeometry_msgs/Vector3 torque\n",
+        "geometry_msgs/Transform" => "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n",
+        "geometry_msgs/TransformStamped" => {
+            "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform\n"
+        }
+        _ => unreachable!("fields_of: every dependency named in MsgType::definition is listed"),
+    }
+}
+
+fn write_header(writer: &mut CdrWriter, header: &Header) {
+    writer.i32(header.stamp.sec);
+    writer.u32(header.stamp.nanosec);
+    writer.string(&header.frame_id);
+}
+
+fn read_header(reader: &mut CdrReader<'_>) -> Result<Header, CdrError> {
+    let sec = reader.i32("header.stamp.sec")?;
+    let nanosec = reader.u32("header.stamp.nanosec")?;
+    let frame_id = reader.string("header.frame_id")?;
+    Ok(Header {
+        stamp: Time { sec, nanosec },
+        frame_id,
+    })
+}
+
+fn write_f64s(writer: &mut CdrWriter, values: &[f64]) {
+    for value in values {
+        writer.f64(*value);
+    }
+}
+
+fn read_f64s<const N: usize>(reader: &mut CdrReader<'_>, names: [&str; N]) -> Result<[f64; N], CdrError> {
+    let mut out = [0.0; N];
+    for (slot, name) in out.iter_mut().zip(names) {
+        *slot = reader.f64(name)?;
+    }
+    Ok(out)
+}
+
+impl PoseStamped {
+    /// The CDR bytes.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut writer = CdrWriter::new();
+        write_header(&mut writer, &self.header);
+        write_f64s(&mut writer, &self.position);
+        write_f64s(&mut writer, &self.orientation_xyzw);
+        writer.finish()
+    }
+
+    /// Reads the CDR bytes.
+    pub fn decode(data: &[u8]) -> Result<PoseStamped, CdrError> {
+        let mut reader = CdrReader::new(data)?;
+        Ok(PoseStamped {
+            header: read_header(&mut reader)?,
+            position: read_f64s(&mut reader, ["pose.position.x", "pose.position.y", "pose.position.z"])?,
+            orientation_xyzw: read_f64s(
+                &mut reader,
+                [
+                    "pose.orientation.x",
+                    "pose.orientation.y",
+                    "pose.orientation.z",
+                    "pose.orientation.w",
+                ],
+            )?,
+        })
+    }
+}
+
+impl WrenchStamped {
+    /// The CDR bytes.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut writer = CdrWriter::new();
+        write_header(&mut writer, &self.header);
+        write_f64s(&mut writer, &self.force);
+        write_f64s(&mut writer, &self.torque);
+        writer.finish()
+    }
+
+    /// Reads the CDR bytes.
+    pub fn decode(data: &[u8]) -> Result<WrenchStamped, CdrError> {
+        let mut reader = CdrReader::new(data)?;
+        Ok(WrenchStamped {
+            header: read_header(&mut reader)?,
+            force: read_f64s(&mut reader, ["wrench.force.x", "wrench.force.y", "wrench.force.z"])?,
+            torque: read_f64s(&mut reader, ["wrench.torque.x", "wrench.torque.y", "wrench.torque.z"])?,
+        })
+    }
+}
+
+/// Smallest CDR size of one `TransformStamped` (stamp, two empty strings, seven doubles).
+const MIN_TRANSFORM_BYTES: usize = 8 + 4 + 4 + 7 * 8;
+
+/// `tf2_msgs/TFMessage`'s CDR bytes.
+pub fn encode_tf(transforms: &[TransformStamped]) -> Vec<u8> {
+    let mut writer = CdrWriter::new();
+    writer.u32(u32::try_from(transforms.len()).unwrap_or(u32::MAX));
+    for transform in transforms {
+        write_header(&mut writer, &transform.header);
+        writer.string(&transform.child_frame_id);
+        write_f64s(&mut writer, &transform.translation);
+        write_f64s(&mut writer, &transform.rotation_xyzw);
+    }
+    writer.finish()
+}
+
+/// Reads a `tf2_msgs/TFMessage`.
+pub fn decode_tf(data: &[u8]) -> Result<Vec<TransformStamped>, CdrError> {
+    let mut reader = CdrReader::new(data)?;
+    let count = reader.count("transforms", MIN_TRANSFORM_BYTES)?;
+    let mut out = Vec::with_capacity(count);
+    for _ in 0..count {
+        let header = read_header(&mut reader)?;
+        let child_frame_id = reader.string("child_frame_id")?;
+        out.push(TransformStamped {
+            header,
+            child_frame_id,
+            translation: read_f64s(
+                &mut reader,
+                [
+                    "transform.translation.x",
+                    "transform.translation.y",
+                    "transform.translation.z",
+                ],
+            )?,
+            rotation_xyzw: read_f64s(
+                &mut reader,
+                [
+                    "transform.rotation.x",
+                    "transform.rotation.y",
+                    "transform.rotation.z",
+                    "transform.rotation.w",
+                ],
+            )?,
+        });
+    }
+    Ok(out)
+}
+
+impl JointState {
+    /// The CDR bytes.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut writer = CdrWriter::new();
+        write_header(&mut writer, &self.header);
+        writer.string_seq(&self.name);
+        writer.f64_seq(&self.position);
+        writer.f64_seq(&self.velocity);
+        writer.f64_seq(&self.effort);
+        writer.finish()
+    }
+
+    /// Reads the CDR bytes.
+    pub fn decode(data: &[u8]) -> Result<JointState, CdrError> {
+        let mut reader = CdrReader::new(data)?;
+        Ok(JointState {
+            header: read_header(&mut reader)?,
+            name: reader.string_seq("name")?,
+            position: reader.f64_seq("position")?,
+            velocity: reader.f64_seq("velocity")?,
+            effort: reader.f64_seq("effort")?,
+        })
+    }
+}
+
+/// `std_msgs/String`'s CDR bytes.
+pub fn encode_string(text: &str) -> Vec<u8> {
+    let mut writer = CdrWriter::new();
+    writer.string(text);
+    writer.finish()
+}
+
+/// Reads a `std_msgs/String`.
+pub fn decode_string(data: &[u8]) -> Result<String, CdrError> {
+    CdrReader::new(data)?.string("data")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_round_trip() {
+        let header = Header {
+            stamp: Time::from_seconds(12.345_678_901),
+            frame_id: "base".into(),
+        };
+        assert_eq!(
+            header.stamp,
+            Time {
+                sec: 12,
+                nanosec: 345_678_901
+            }
+        );
+        let pose = PoseStamped {
+            header: header.clone(),
+            position: [0.1, -0.2, 0.3],
+            orientation_xyzw: [0.0, 1.0, 0.0, 0.0],
+        };
+        assert_eq!(PoseStamped::decode(&pose.encode()), Ok(pose));
+        let joints = JointState {
+            header: header.clone(),
+            name: vec!["a".into(), "bb".into()],
+            position: vec![1.0, 2.0],
+            velocity: vec![],
+            effort: vec![3.0, 4.0],
+        };
+        assert_eq!(JointState::decode(&joints.encode()), Ok(joints));
+        let tf = vec![TransformStamped {
+            header,
+            child_frame_id: "tool".into(),
+            translation: [1.0, 2.0, 3.0],
+            rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
+        }];
+        assert_eq!(decode_tf(&encode_tf(&tf)), Ok(tf));
+        assert_eq!(decode_string(&encode_string("press")), Ok("press".to_owned()));
+    }
+
+    #[test]
+    fn negative_times_keep_nanoseconds_positive() {
+        let time = Time::from_seconds(-0.25);
+        assert_eq!(
+            time,
+            Time {
+                sec: -1,
+                nanosec: 750_000_000
+            }
+        );
+        assert_eq!(time.nanos(), -250_000_000);
+    }
+
+    #[test]
+    fn schema_names_are_matched_with_or_without_msg() {
+        assert_eq!(
+            MsgType::from_schema_name("geometry_msgs/PoseStamped"),
+            Some(MsgType::PoseStamped)
+        );
+        assert_eq!(
+            MsgType::from_schema_name("tf2_msgs/msg/TFMessage"),
+            Some(MsgType::TfMessage)
+        );
+        assert_eq!(MsgType::from_schema_name("geometry_msgs/msg/Pose"), None);
+        assert!(MsgType::PoseStamped
+            .definition()
+            .contains("MSG: geometry_msgs/Quaternion\nfloat64 x"));
+    }
+}

@@ -1,0 +1,738 @@
+//! Reading a demonstration out of an MCAP file (a ROS 2 bag): the tool pose from a
+//! `geometry_msgs/PoseStamped` topic or from TF (`tf2_msgs/TFMessage`, one parent → child
+//! transform), the wrench from a `geometry_msgs/WrenchStamped` topic, resampled onto the pose's
+//! times by linear interpolation.
+//!
+//! Topics are chosen by the caller ([`BagOptions`]) or found by type: the one topic of the type,
+//! else an error listing the candidates. Times are the header stamps, or the log times for a
+//! stream whose stamps are all zero, counted from the first pose sample. The file is streamed
+//! (memory grows with the kept samples and the largest chunk, each bounded), and a malformed
+//! file or message is an error naming the file, the topic and the message's index on its topic
+//! (counted from 1).
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+
+use mcap::sans_io::LinearReaderOptions;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use skill_runtime::demo::{Demo, DemoWarning, Loaded, WrenchDeclaration, WrenchFrame};
+
+use super::msgs::{decode_tf, MsgType, PoseStamped, WrenchStamped};
+use super::{BagError, BagOptions};
+
+/// Largest MCAP record (a chunk, compressed or not) read into memory \[bytes\].
+pub const MAX_RECORD_BYTES: usize = 256 << 20;
+/// Most samples kept from one pose or wrench stream (the demonstration's bound after resampling).
+pub const MAX_SAMPLES: usize = 2_000_000;
+/// Most transforms kept from all TF topics together.
+pub const MAX_TRANSFORMS: usize = 8_000_000;
+
+/// A demonstration read from a bag, with what was read and what the reader noticed.
+#[derive(Debug, Clone)]
+pub struct BagDemo {
+    /// The demonstration, its warnings and the wrench's declared frame.
+    pub loaded: Loaded,
+    /// Where the pose came from: ``topic `/pose` `` or ``TF `base` → `tool` ``.
+    pub pose_source: String,
+    /// The wrench topic.
+    pub wrench_topic: String,
+    /// Things the reader did or noticed (left-out samples, clocks, the wrench's frame).
+    pub notes: Vec<String>,
+}
+
+/// One stamped sample: the header stamp, the log time (both ns), the message's index on its
+/// topic (from 1), and six or seven values.
+#[derive(Debug, Clone, Copy)]
+struct Sample<const N: usize> {
+    stamp_ns: i64,
+    log_ns: u64,
+    index: u64,
+    values: [f64; N],
+}
+
+/// What was kept of one channel of a type skillc reads.
+#[derive(Debug, Default)]
+struct Stream<const N: usize> {
+    topic: String,
+    samples: Vec<Sample<N>>,
+    /// The first header frame_id, and whether later messages named another.
+    frame_id: Option<String>,
+    frame_changes: bool,
+    /// The first message that could not be used (reported only if this stream is chosen).
+    problem: Option<Problem>,
+}
+
+impl<const N: usize> Stream<N> {
+    fn new(topic: &str) -> Self {
+        Stream {
+            topic: topic.to_owned(),
+            samples: Vec::new(),
+            frame_id: None,
+            frame_changes: false,
+            problem: None,
+        }
+    }
+
+    fn frame(&mut self, frame_id: &str) {
+        match &self.frame_id {
+            None => self.frame_id = Some(frame_id.to_owned()),
+            Some(first) if first != frame_id => self.frame_changes = true,
+            Some(_) => {}
+        }
+    }
+}
+
+/// A message that could not be used: its topic, index on the topic (from 1) and why.
+#[derive(Debug, Clone)]
+struct Problem {
+    topic: String,
+    index: u64,
+    reason: String,
+}
+
+impl Problem {
+    fn error(&self, file: &str) -> BagError {
+        message_error(file, &format!("topic `{}`", self.topic), self.index, &self.reason)
+    }
+}
+
+/// A TF edge's samples and the topics they came from.
+#[derive(Debug, Default)]
+struct TfEdge {
+    samples: Vec<Sample<7>>,
+    topics: Vec<String>,
+}
+
+/// Everything read from the file, before topics are chosen.
+#[derive(Debug, Default)]
+struct Contents {
+    poses: Vec<Stream<7>>,
+    wrenches: Vec<Stream<6>>,
+    /// `(parent, child)` → samples.
+    tf: BTreeMap<(String, String), TfEdge>,
+    tf_topics: Vec<String>,
+    tf_problem: Option<Problem>,
+    n_transforms: usize,
+    /// Topics of a known type whose messages are not CDR, with their encoding.
+    not_cdr: Vec<(String, String)>,
+}
+
+/// Reads the demonstration in the MCAP file at `path`.
+pub fn read_demo(path: &Path, options: &BagOptions) -> Result<BagDemo, BagError> {
+    let file = path.display().to_string();
+    let contents = scan(path, &file)?;
+    let mut notes = Vec::new();
+    let (pose_source, parent_frame, child_frame, poses) = choose_pose(&file, &contents, options)?;
+    let wrench = choose_wrench(&file, &contents, options)?;
+    let wrench_topic = wrench.topic.clone();
+    let wrench_place = format!("topic `{wrench_topic}`");
+    let pose_fields = if child_frame.is_some() { TF_FIELDS } else { POSE_FIELDS };
+
+    let pose_times = times(&poses, &pose_source, &mut notes);
+    let wrench_times = times(&wrench.samples, &wrench_place, &mut notes);
+    let pose_order = sorted(&file, &pose_source, &pose_times, &poses)?;
+    let wrench_order = sorted(&file, &wrench_place, &wrench_times, &wrench.samples)?;
+    if pose_times.uses_log_time != wrench_times.uses_log_time {
+        notes.push(format!(
+            "the pose ({pose_source}) is timed by its {} and the wrench (`{wrench_topic}`) by its {}: check that both clocks agree",
+            pose_times.name(),
+            wrench_times.name()
+        ));
+    }
+
+    // The wrench on the pose's times: linear interpolation inside the wrench's time span; pose
+    // samples outside it are left out.
+    let wrench_t: Vec<i64> = wrench_order.iter().map(|&i| wrench_times.ns[i]).collect();
+    let (first_w, last_w) = (wrench_t[0], wrench_t[wrench_t.len() - 1]);
+    let kept: Vec<usize> = pose_order
+        .iter()
+        .copied()
+        .filter(|&i| (first_w..=last_w).contains(&pose_times.ns[i]))
+        .collect();
+    let left_out = pose_order.len() - kept.len();
+    if kept.len() < 2 {
+        return Err(BagError::Topics {
+            file,
+            reason: format!(
+                "the pose ({pose_source}) and the wrench (`{wrench_topic}`) overlap in {} sample(s) of time: they do not cover the same period (are both timed by the same clock?)",
+                kept.len()
+            ),
+        });
+    }
+    if left_out > 0 {
+        notes.push(format!(
+            "{left_out} pose sample(s) outside the wrench's time span were left out (the wrench is interpolated, not extrapolated)"
+        ));
+    }
+    let pose_rate = rate_hz(&pose_times.ns, &pose_order);
+    let wrench_rate = rate_hz(&wrench_times.ns, &wrench_order);
+    if wrench_rate > 2.0 * pose_rate {
+        notes.push(format!(
+            "the wrench ({wrench_rate:.0} Hz) is sampled faster than the pose ({pose_rate:.0} Hz); it is interpolated at the pose's times, so force detail between pose samples is lost"
+        ));
+    }
+
+    let t0 = pose_times.ns[kept[0]];
+    let mut demo = Demo {
+        source: file.clone(),
+        t_s: Vec::with_capacity(kept.len()),
+        position_m: Vec::with_capacity(kept.len()),
+        orientation: Vec::with_capacity(kept.len()),
+        force_n: Vec::with_capacity(kept.len()),
+        torque_nm: Vec::with_capacity(kept.len()),
+    };
+    let mut renormalised = (0usize, 0usize, 0.0f64);
+    let mut cursor = 0usize;
+    for &i in &kept {
+        let sample = &poses[i];
+        let t_ns = pose_times.ns[i];
+        check_finite(&file, &pose_source, sample.index, &sample.values, &pose_fields)?;
+        let [x, y, z, qx, qy, qz, qw] = sample.values;
+        let raw = Quaternion::new(qw, qx, qy, qz);
+        let norm = raw.norm();
+        if norm < 1e-9 {
+            return Err(message_error(
+                &file,
+                &pose_source,
+                sample.index,
+                "the orientation quaternion has zero norm",
+            ));
+        }
+        if (norm - 1.0).abs() > 1e-6 {
+            if renormalised.0 == 0 {
+                renormalised.1 = sample.index as usize;
+            }
+            renormalised.0 += 1;
+            renormalised.2 = renormalised.2.max((norm - 1.0).abs());
+        }
+        // The wrench samples around t: wrench_t[cursor] <= t < wrench_t[cursor + 1] (or t is the last).
+        while cursor + 1 < wrench_t.len() && wrench_t[cursor + 1] <= t_ns {
+            cursor += 1;
+        }
+        let below = &wrench.samples[wrench_order[cursor]];
+        check_finite(&file, &wrench_place, below.index, &below.values, &WRENCH_FIELDS)?;
+        let values = if wrench_t[cursor] == t_ns || cursor + 1 == wrench_t.len() {
+            below.values
+        } else {
+            let above = &wrench.samples[wrench_order[cursor + 1]];
+            check_finite(&file, &wrench_place, above.index, &above.values, &WRENCH_FIELDS)?;
+            let share = (t_ns - wrench_t[cursor]) as f64 / (wrench_t[cursor + 1] - wrench_t[cursor]) as f64;
+            std::array::from_fn(|k| below.values[k] + share * (above.values[k] - below.values[k]))
+        };
+        demo.t_s.push((t_ns - t0) as f64 * 1e-9);
+        demo.position_m.push(Vector3::new(x, y, z));
+        demo.orientation.push(UnitQuaternion::from_quaternion(raw));
+        demo.force_n.push(Vector3::new(values[0], values[1], values[2]));
+        demo.torque_nm.push(Vector3::new(values[3], values[4], values[5]));
+    }
+
+    let mut warnings = Vec::new();
+    if renormalised.0 > 0 {
+        warnings.push(DemoWarning::Renormalised {
+            file: file.clone(),
+            count: renormalised.0,
+            first_row: renormalised.1,
+            max_deviation: renormalised.2,
+        });
+    }
+    let flipped = make_continuous(&mut demo.orientation);
+    if let Some(&first) = flipped.first() {
+        warnings.push(DemoWarning::SignFlipped {
+            file: file.clone(),
+            count: flipped.len(),
+            first_row: poses[kept[first]].index as usize,
+        });
+    }
+
+    let wrench_frame_id = wrench.frame_id.clone().unwrap_or_default();
+    let frame = if !wrench_frame_id.is_empty() && wrench_frame_id == parent_frame {
+        Some(WrenchFrame::Base)
+    } else if !wrench_frame_id.is_empty() && Some(wrench_frame_id.as_str()) == child_frame.as_deref() {
+        Some(WrenchFrame::Sensor)
+    } else if wrench_frame_id.is_empty() {
+        notes.push(format!(
+            "`{wrench_topic}` names no header frame: the wrench's axes (base or sensor) are detected when learning (declare them with --wrench-frame)"
+        ));
+        None
+    } else {
+        notes.push(format!(
+            "the wrench's frame `{wrench_frame_id}` is neither the pose's base frame `{parent_frame}`{}: its axes (base or sensor) are detected when learning (declare them with --wrench-frame)",
+            child_frame.as_deref().map(|c| format!(" nor the tool frame `{c}`")).unwrap_or_default()
+        ));
+        None
+    };
+    if wrench.frame_changes {
+        notes.push(format!(
+            "`{wrench_topic}` names more than one header frame; the first, `{wrench_frame_id}`, was taken"
+        ));
+    }
+    Ok(BagDemo {
+        loaded: Loaded {
+            demo,
+            warnings,
+            wrench: WrenchDeclaration {
+                frame,
+                ..WrenchDeclaration::default()
+            },
+        },
+        pose_source,
+        wrench_topic,
+        notes,
+    })
+}
+
+const POSE_FIELDS: [&str; 7] = [
+    "pose.position.x",
+    "pose.position.y",
+    "pose.position.z",
+    "pose.orientation.x",
+    "pose.orientation.y",
+    "pose.orientation.z",
+    "pose.orientation.w",
+];
+const TF_FIELDS: [&str; 7] = [
+    "transform.translation.x",
+    "transform.translation.y",
+    "transform.translation.z",
+    "transform.rotation.x",
+    "transform.rotation.y",
+    "transform.rotation.z",
+    "transform.rotation.w",
+];
+const WRENCH_FIELDS: [&str; 6] = [
+    "wrench.force.x",
+    "wrench.force.y",
+    "wrench.force.z",
+    "wrench.torque.x",
+    "wrench.torque.y",
+    "wrench.torque.z",
+];
+
+fn message_error(file: &str, place: &str, index: u64, reason: &str) -> BagError {
+    BagError::Message {
+        file: file.to_owned(),
+        place: place.to_owned(),
+        index,
+        reason: reason.to_owned(),
+    }
+}
+
+fn check_finite(file: &str, source: &str, index: u64, values: &[f64], names: &[&str]) -> Result<(), BagError> {
+    match values.iter().zip(names).find(|(value, _)| !value.is_finite()) {
+        Some((value, name)) => Err(message_error(file, source, index, &format!("`{name}` is {value}"))),
+        None => Ok(()),
+    }
+}
+
+/// Negates quaternions so that each lies in the same hemisphere as its predecessor; the indices
+/// negated (as the CSV reader does).
+fn make_continuous(orientation: &mut [UnitQuaternion<f64>]) -> Vec<usize> {
+    let mut flipped = Vec::new();
+    for idx in 1..orientation.len() {
+        if orientation[idx].coords.dot(&orientation[idx - 1].coords) < 0.0 {
+            orientation[idx] = UnitQuaternion::new_unchecked(-orientation[idx].into_inner());
+            flipped.push(idx);
+        }
+    }
+    flipped
+}
+
+/// A stream's times in ns: its header stamps, or its log times when every stamp is zero.
+struct Times {
+    ns: Vec<i64>,
+    uses_log_time: bool,
+}
+
+impl Times {
+    fn name(&self) -> &'static str {
+        if self.uses_log_time {
+            "log times (its header stamps are zero)"
+        } else {
+            "header stamps"
+        }
+    }
+}
+
+fn times<const N: usize>(samples: &[Sample<N>], source: &str, notes: &mut Vec<String>) -> Times {
+    let uses_log_time = samples.iter().all(|s| s.stamp_ns == 0);
+    if uses_log_time {
+        notes.push(format!("{source} has zero header stamps: its log times were used"));
+    }
+    Times {
+        ns: samples
+            .iter()
+            .map(|s| {
+                if uses_log_time {
+                    i64::try_from(s.log_ns).unwrap_or(i64::MAX)
+                } else {
+                    s.stamp_ns
+                }
+            })
+            .collect(),
+        uses_log_time,
+    }
+}
+
+/// The samples' order by time; two samples at one time are an error.
+fn sorted<const N: usize>(
+    file: &str,
+    source: &str,
+    times: &Times,
+    samples: &[Sample<N>],
+) -> Result<Vec<usize>, BagError> {
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    order.sort_by_key(|&i| times.ns[i]);
+    for pair in order.windows(2) {
+        if times.ns[pair[0]] == times.ns[pair[1]] {
+            return Err(message_error(
+                file,
+                source,
+                samples[pair[1]].index,
+                &format!(
+                    "its time {} ns is that of message {} too: samples must have distinct times",
+                    times.ns[pair[1]], samples[pair[0]].index
+                ),
+            ));
+        }
+    }
+    Ok(order)
+}
+
+fn rate_hz(ns: &[i64], order: &[usize]) -> f64 {
+    match (order.first(), order.last()) {
+        (Some(&a), Some(&b)) if ns[b] > ns[a] => (order.len() - 1) as f64 / ((ns[b] - ns[a]) as f64 * 1e-9),
+        _ => 0.0,
+    }
+}
+
+/// Streams the file once, decoding every message of the three types skillc reads.
+fn scan(path: &Path, file: &str) -> Result<Contents, BagError> {
+    let handle = File::open(path).map_err(|source| BagError::Io {
+        file: file.to_owned(),
+        source,
+    })?;
+    let reader = mcap::io::MessageReader::new_with_options(
+        BufReader::new(handle),
+        LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+    );
+    let mut contents = Contents::default();
+    // Channel id → (kind, index into poses/wrenches, messages seen).
+    let mut channels: BTreeMap<u16, (Option<MsgType>, usize, u64)> = BTreeMap::new();
+    let mut n_messages = 0u64;
+    for message in reader {
+        let message = message.map_err(|source| BagError::Mcap {
+            file: file.to_owned(),
+            messages: n_messages,
+            source,
+        })?;
+        n_messages += 1;
+        let channel = &message.channel;
+        let entry = channels.entry(channel.id).or_insert_with(|| {
+            let kind = channel
+                .schema
+                .as_ref()
+                .and_then(|schema| MsgType::from_schema_name(&schema.name))
+                .filter(|kind| matches!(kind, MsgType::PoseStamped | MsgType::WrenchStamped | MsgType::TfMessage));
+            let topic = channel.topic.as_str();
+            if kind.is_some() && channel.message_encoding != "cdr" {
+                contents
+                    .not_cdr
+                    .push((topic.to_owned(), channel.message_encoding.clone()));
+                return (None, 0, 0);
+            }
+            let slot = match kind {
+                Some(MsgType::PoseStamped) => {
+                    contents.poses.push(Stream::new(topic));
+                    contents.poses.len() - 1
+                }
+                Some(MsgType::WrenchStamped) => {
+                    contents.wrenches.push(Stream::new(topic));
+                    contents.wrenches.len() - 1
+                }
+                Some(_) => {
+                    contents.tf_topics.push(topic.to_owned());
+                    0
+                }
+                None => 0,
+            };
+            (kind, slot, 0)
+        });
+        entry.2 += 1;
+        let (kind, slot, index) = *entry;
+        let topic = channel.topic.as_str();
+        let log_ns = message.log_time;
+        let bad = |reason: String| Problem {
+            topic: topic.to_owned(),
+            index,
+            reason,
+        };
+        match kind {
+            Some(MsgType::PoseStamped) => {
+                let stream = &mut contents.poses[slot];
+                if stream.problem.is_some() {
+                    continue;
+                }
+                match PoseStamped::decode(&message.data) {
+                    Ok(pose) if stream.samples.len() < MAX_SAMPLES => {
+                        stream.frame(&pose.header.frame_id);
+                        let [x, y, z] = pose.position;
+                        let [qx, qy, qz, qw] = pose.orientation_xyzw;
+                        stream.samples.push(Sample {
+                            stamp_ns: pose.header.stamp.nanos(),
+                            log_ns,
+                            index,
+                            values: [x, y, z, qx, qy, qz, qw],
+                        });
+                    }
+                    Ok(_) => stream.problem = Some(bad(format!("more than {MAX_SAMPLES} poses; cut the bag shorter"))),
+                    Err(err) => stream.problem = Some(bad(format!("not a PoseStamped in CDR: {err}"))),
+                }
+            }
+            Some(MsgType::WrenchStamped) => {
+                let stream = &mut contents.wrenches[slot];
+                if stream.problem.is_some() {
+                    continue;
+                }
+                match WrenchStamped::decode(&message.data) {
+                    Ok(wrench) if stream.samples.len() < MAX_SAMPLES => {
+                        stream.frame(&wrench.header.frame_id);
+                        let [fx, fy, fz] = wrench.force;
+                        let [mx, my, mz] = wrench.torque;
+                        stream.samples.push(Sample {
+                            stamp_ns: wrench.header.stamp.nanos(),
+                            log_ns,
+                            index,
+                            values: [fx, fy, fz, mx, my, mz],
+                        });
+                    }
+                    Ok(_) => {
+                        stream.problem = Some(bad(format!("more than {MAX_SAMPLES} wrenches; cut the bag shorter")))
+                    }
+                    Err(err) => stream.problem = Some(bad(format!("not a WrenchStamped in CDR: {err}"))),
+                }
+            }
+            Some(MsgType::TfMessage) => {
+                if contents.tf_problem.is_some() {
+                    continue;
+                }
+                match decode_tf(&message.data) {
+                    Ok(transforms) if contents.n_transforms + transforms.len() <= MAX_TRANSFORMS => {
+                        contents.n_transforms += transforms.len();
+                        for transform in transforms {
+                            let edge = contents
+                                .tf
+                                .entry((transform.header.frame_id.clone(), transform.child_frame_id.clone()))
+                                .or_default();
+                            if !edge.topics.iter().any(|t| t == topic) {
+                                edge.topics.push(topic.to_owned());
+                            }
+                            let [x, y, z] = transform.translation;
+                            let [qx, qy, qz, qw] = transform.rotation_xyzw;
+                            edge.samples.push(Sample {
+                                stamp_ns: transform.header.stamp.nanos(),
+                                log_ns,
+                                index,
+                                values: [x, y, z, qx, qy, qz, qw],
+                            });
+                        }
+                    }
+                    Ok(_) => {
+                        contents.tf_problem = Some(bad(format!(
+                            "more than {MAX_TRANSFORMS} transforms; cut the bag shorter"
+                        )))
+                    }
+                    Err(err) => contents.tf_problem = Some(bad(format!("not a TFMessage in CDR: {err}"))),
+                }
+            }
+            _ => {}
+        }
+    }
+    if n_messages == 0 {
+        return Err(BagError::Topics {
+            file: file.to_owned(),
+            reason: "the file holds no messages".into(),
+        });
+    }
+    Ok(contents)
+}
+
+fn list<const N: usize>(streams: &[Stream<N>]) -> String {
+    streams
+        .iter()
+        .map(|s| format!("`{}` ({} messages)", s.topic, s.samples.len()))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn not_cdr_note(contents: &Contents) -> String {
+    if contents.not_cdr.is_empty() {
+        return String::new();
+    }
+    let topics: Vec<String> = contents
+        .not_cdr
+        .iter()
+        .map(|(topic, encoding)| format!("`{topic}` ({encoding})"))
+        .collect();
+    format!("; topics not in CDR were skipped: {}", topics.join(", "))
+}
+
+type PoseChoice = (String, String, Option<String>, Vec<Sample<7>>);
+
+/// The pose samples: from `--pose-topic`, from TF when `--tf-parent`/`--tf-child` is given, else
+/// the one PoseStamped topic, else the one moving TF edge. Returns the source's name, the parent
+/// frame, the child frame (TF only) and the samples.
+fn choose_pose(file: &str, contents: &Contents, options: &BagOptions) -> Result<PoseChoice, BagError> {
+    let topics_error = |reason: String| BagError::Topics {
+        file: file.to_owned(),
+        reason,
+    };
+    let use_tf = options.tf_parent.is_some() || options.tf_child.is_some();
+    let stream =
+        match &options.pose_topic {
+            Some(name) => {
+                match contents.poses.iter().find(|s| &s.topic == name) {
+                    Some(stream) => Some(stream),
+                    None if contents.tf_topics.contains(name) => None,
+                    None => {
+                        return Err(topics_error(format!(
+                    "--pose-topic `{name}` is not a geometry_msgs/msg/PoseStamped topic of the file; it has {}{}",
+                    if contents.poses.is_empty() { "none".to_owned() } else { list(&contents.poses) },
+                    not_cdr_note(contents)
+                )))
+                    }
+                }
+            }
+            None if use_tf => None,
+            None => match contents.poses.as_slice() {
+                [only] => Some(only),
+                [] => None,
+                many => {
+                    return Err(topics_error(format!(
+                        "{} geometry_msgs/msg/PoseStamped topics: {}; choose one with --pose-topic",
+                        many.len(),
+                        list(many)
+                    )))
+                }
+            },
+        };
+    if let Some(stream) = stream {
+        if let Some(problem) = &stream.problem {
+            return Err(problem.error(file));
+        }
+        if stream.samples.len() < 2 {
+            return Err(topics_error(format!(
+                "pose topic `{}` has {} message(s), at least 2 are needed",
+                stream.topic,
+                stream.samples.len()
+            )));
+        }
+        return Ok((
+            format!("topic `{}`", stream.topic),
+            stream.frame_id.clone().unwrap_or_default(),
+            None,
+            stream.samples.clone(),
+        ));
+    }
+    // TF.
+    if let Some(problem) = &contents.tf_problem {
+        return Err(problem.error(file));
+    }
+    let edges: Vec<(&(String, String), &TfEdge)> = contents
+        .tf
+        .iter()
+        .filter(|((parent, child), _)| {
+            options.tf_parent.as_ref().is_none_or(|p| p == parent)
+                && options.tf_child.as_ref().is_none_or(|c| c == child)
+        })
+        .filter(|(_, edge)| options.pose_topic.as_ref().is_none_or(|t| edge.topics.contains(t)))
+        .collect();
+    let describe = |edges: &[(&(String, String), &TfEdge)]| {
+        edges
+            .iter()
+            .map(|((parent, child), edge)| format!("`{parent}` → `{child}` ({} samples)", edge.samples.len()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let moving: Vec<_> = edges
+        .iter()
+        .copied()
+        .filter(|(_, edge)| edge.samples.len() >= 2)
+        .collect();
+    let chosen = match (moving.as_slice(), use_tf) {
+        ([one], _) => *one,
+        ([], _) if contents.tf.is_empty() && contents.poses.is_empty() => {
+            return Err(topics_error(format!(
+                "no tool pose: the file has no geometry_msgs/msg/PoseStamped topic and no tf2_msgs/msg/TFMessage topic{}",
+                not_cdr_note(contents)
+            )))
+        }
+        ([], _) => {
+            let all: Vec<_> = contents.tf.iter().collect();
+            return Err(topics_error(format!(
+                "no TF transform{}{} with at least 2 samples; the file's transforms: {}",
+                options.tf_parent.as_ref().map(|p| format!(" from `{p}`")).unwrap_or_default(),
+                options.tf_child.as_ref().map(|c| format!(" to `{c}`")).unwrap_or_default(),
+                if all.is_empty() { "none".to_owned() } else { describe(&all) }
+            )))
+        }
+        (many, _) => {
+            return Err(topics_error(format!(
+                "{} TF transforms could be the tool's pose: {}; choose one with --tf-parent and --tf-child (only a direct transform is read, not a chain)",
+                many.len(),
+                describe(many)
+            )))
+        }
+    };
+    let ((parent, child), edge) = chosen;
+    Ok((
+        format!("TF `{parent}` → `{child}` on `{}`", edge.topics.join("`, `")),
+        parent.clone(),
+        Some(child.clone()),
+        edge.samples.clone(),
+    ))
+}
+
+/// The wrench stream: `--wrench-topic`, else the one WrenchStamped topic.
+fn choose_wrench<'c>(file: &str, contents: &'c Contents, options: &BagOptions) -> Result<&'c Stream<6>, BagError> {
+    let topics_error = |reason: String| BagError::Topics {
+        file: file.to_owned(),
+        reason,
+    };
+    let stream =
+        match &options.wrench_topic {
+            Some(name) => {
+                contents.wrenches.iter().find(|s| &s.topic == name).ok_or_else(|| {
+                    topics_error(format!(
+                "--wrench-topic `{name}` is not a geometry_msgs/msg/WrenchStamped topic of the file; it has {}{}",
+                if contents.wrenches.is_empty() { "none".to_owned() } else { list(&contents.wrenches) },
+                not_cdr_note(contents)
+            ))
+                })?
+            }
+            None => match contents.wrenches.as_slice() {
+                [only] => only,
+                [] => {
+                    return Err(topics_error(format!(
+                        "no wrench: the file has no geometry_msgs/msg/WrenchStamped topic{}",
+                        not_cdr_note(contents)
+                    )))
+                }
+                many => {
+                    return Err(topics_error(format!(
+                        "{} geometry_msgs/msg/WrenchStamped topics: {}; choose one with --wrench-topic",
+                        many.len(),
+                        list(many)
+                    )))
+                }
+            },
+        };
+    if let Some(problem) = &stream.problem {
+        return Err(problem.error(file));
+    }
+    if stream.samples.is_empty() {
+        return Err(topics_error(format!("wrench topic `{}` has no messages", stream.topic)));
+    }
+    Ok(stream)
+}

@@ -1,0 +1,209 @@
+//! Writing MCAP files with ROS 2 messages: a run log (joint states, tool pose, desired pose,
+//! wrench, state changes) and a demonstration (tool pose and wrench), in memory, for the caller
+//! to write atomically.
+
+use std::collections::BTreeMap;
+use std::io::Cursor;
+
+use skill_runtime::demo::{Demo, WrenchFrame};
+use skill_runtime::exec::RunLog;
+
+use super::msgs::{encode_string, Header, JointState, MsgType, PoseStamped, Time, WrenchStamped};
+use super::BagError;
+
+/// The topic a written demonstration's pose goes to (`geometry_msgs/msg/PoseStamped`).
+pub const DEMO_POSE_TOPIC: &str = "/tool_pose";
+/// The topic a written demonstration's wrench goes to (`geometry_msgs/msg/WrenchStamped`).
+pub const DEMO_WRENCH_TOPIC: &str = "/wrench";
+/// The robot base frame's name in written headers.
+const BASE_FRAME: &str = "base";
+/// The tool (flange or tool point) frame's name in written headers.
+const TOOL_FRAME: &str = "tool";
+
+/// The topics of a run log written as MCAP.
+#[derive(Debug, Clone, Copy)]
+pub struct RunLogTopics;
+
+impl RunLogTopics {
+    /// `sensor_msgs/msg/JointState` every tick: positions, velocities, and as efforts the
+    /// commanded torques.
+    pub const JOINT_STATES: &'static str = "/joint_states";
+    /// `geometry_msgs/msg/PoseStamped` every tick: the measured tool point in frame `base`.
+    pub const TOOL_POSE: &'static str = "/tool_pose";
+    /// `geometry_msgs/msg/PoseStamped` every tick: the commanded tool point in frame `base`.
+    pub const DESIRED_POSE: &'static str = "/desired_pose";
+    /// `geometry_msgs/msg/WrenchStamped` every tick: the wrench the environment exerts on the
+    /// tool (what a wrist sensor reports, the negative of the CSV log's applied `fx..mz`), at the
+    /// tool point, in the axes of frame `base`.
+    pub const WRENCH: &'static str = "/wrench";
+    /// `std_msgs/msg/String` at the first tick and at every change of state: the state's name
+    /// (`step/state` in a task).
+    pub const STATE: &'static str = "/skill_state";
+}
+
+/// An MCAP writer into memory with the channels registered by topic.
+struct Bag {
+    writer: mcap::Writer<Cursor<Vec<u8>>>,
+    channels: BTreeMap<&'static str, u16>,
+    sequence: u32,
+}
+
+impl Bag {
+    fn new(channels: &[(&'static str, MsgType)]) -> Result<Bag, BagError> {
+        let mut writer = mcap::WriteOptions::new()
+            .profile("ros2")
+            .compression(Some(mcap::Compression::Zstd))
+            .create(Cursor::new(Vec::new()))
+            .map_err(BagError::Write)?;
+        let mut ids = BTreeMap::new();
+        for &(topic, ty) in channels {
+            let schema = writer
+                .add_schema(ty.schema_name(), "ros2msg", ty.definition().as_bytes())
+                .map_err(BagError::Write)?;
+            let id = writer
+                .add_channel(schema, topic, "cdr", &BTreeMap::new())
+                .map_err(BagError::Write)?;
+            ids.insert(topic, id);
+        }
+        Ok(Bag {
+            writer,
+            channels: ids,
+            sequence: 0,
+        })
+    }
+
+    fn put(&mut self, topic: &'static str, t: Time, data: &[u8]) -> Result<(), BagError> {
+        let channel_id = *self
+            .channels
+            .get(topic)
+            .expect("Bag::put: every topic is registered in Bag::new");
+        self.sequence = self.sequence.wrapping_add(1);
+        let ns = u64::try_from(t.nanos()).unwrap_or(0);
+        let header = mcap::records::MessageHeader {
+            channel_id,
+            sequence: self.sequence,
+            log_time: ns,
+            publish_time: ns,
+        };
+        self.writer
+            .write_to_known_channel(&header, data)
+            .map_err(BagError::Write)
+    }
+
+    fn finish(mut self) -> Result<Vec<u8>, BagError> {
+        self.writer.finish().map_err(BagError::Write)?;
+        Ok(self.writer.into_inner().into_inner())
+    }
+}
+
+fn header(t: Time, frame: &str) -> Header {
+    Header {
+        stamp: t,
+        frame_id: frame.to_owned(),
+    }
+}
+
+/// A pose `[x, y, z, qw, qx, qy, qz]` (the log's order) as a PoseStamped.
+fn pose(t: Time, pose: &[f64; 7]) -> PoseStamped {
+    let [x, y, z, qw, qx, qy, qz] = *pose;
+    PoseStamped {
+        header: header(t, BASE_FRAME),
+        position: [x, y, z],
+        orientation_xyzw: [qx, qy, qz, qw],
+    }
+}
+
+/// A demonstration as MCAP: its flange pose on [`DEMO_POSE_TOPIC`] and its wrench on
+/// [`DEMO_WRENCH_TOPIC`], both stamped with the sample times. The wrench's header names frame
+/// `base` or `tool` as `wrench_frame` says, and no frame when it is not known (the reader then
+/// leaves it to be detected).
+pub fn write_demo(demo: &Demo, wrench_frame: Option<WrenchFrame>) -> Result<Vec<u8>, BagError> {
+    let wrench_frame_id = match wrench_frame {
+        Some(WrenchFrame::Base) => BASE_FRAME,
+        Some(WrenchFrame::Sensor) => TOOL_FRAME,
+        None => "",
+    };
+    let mut bag = Bag::new(&[
+        (DEMO_POSE_TOPIC, MsgType::PoseStamped),
+        (DEMO_WRENCH_TOPIC, MsgType::WrenchStamped),
+    ])?;
+    for k in 0..demo.len() {
+        let t = Time::from_seconds(demo.t_s[k]);
+        let q = demo.orientation[k].quaternion();
+        let p = demo.position_m[k];
+        let message = PoseStamped {
+            header: header(t, BASE_FRAME),
+            position: [p.x, p.y, p.z],
+            orientation_xyzw: [q.i, q.j, q.k, q.w],
+        };
+        bag.put(DEMO_POSE_TOPIC, t, &message.encode())?;
+        let (f, m) = (demo.force_n[k], demo.torque_nm[k]);
+        let message = WrenchStamped {
+            header: header(t, wrench_frame_id),
+            force: [f.x, f.y, f.z],
+            torque: [m.x, m.y, m.z],
+        };
+        bag.put(DEMO_WRENCH_TOPIC, t, &message.encode())?;
+    }
+    bag.finish()
+}
+
+/// Consecutive run logs (one, or a task's steps: states written `step/state`) as MCAP on the
+/// [`RunLogTopics`]. `joint_names` name the joints (fewer names than joints: `joint_N`). A log
+/// whose clock starts again is shifted to follow the one before it, so times never go back.
+pub fn write_run_log(logs: &[(Option<&str>, &RunLog)], joint_names: &[String]) -> Result<Vec<u8>, BagError> {
+    let mut bag = Bag::new(&[
+        (RunLogTopics::JOINT_STATES, MsgType::JointState),
+        (RunLogTopics::TOOL_POSE, MsgType::PoseStamped),
+        (RunLogTopics::DESIRED_POSE, MsgType::PoseStamped),
+        (RunLogTopics::WRENCH, MsgType::WrenchStamped),
+        (RunLogTopics::STATE, MsgType::String),
+    ])?;
+    let mut offset_s = 0.0;
+    let mut last_s = f64::NEG_INFINITY;
+    let mut last_state: Option<String> = None;
+    let mut names: Vec<String> = joint_names.to_vec();
+    for (step, log) in logs {
+        if let Some(first) = log.ticks.first() {
+            if first.t_s + offset_s <= last_s {
+                offset_s = last_s + 1e-3 - first.t_s;
+            }
+        }
+        for tick in &log.ticks {
+            let t_s = tick.t_s + offset_s;
+            last_s = t_s;
+            let t = Time::from_seconds(t_s);
+            let dof = tick.joint_state.len() / 2;
+            while names.len() < dof {
+                names.push(format!("joint_{}", names.len() + 1));
+            }
+            let joints = JointState {
+                header: header(t, ""),
+                name: names[..dof].to_vec(),
+                position: tick.joint_state[..dof].to_vec(),
+                velocity: tick.joint_state[dof..2 * dof].to_vec(),
+                effort: tick.torques.to_vec(),
+            };
+            bag.put(RunLogTopics::JOINT_STATES, t, &joints.encode())?;
+            bag.put(RunLogTopics::TOOL_POSE, t, &pose(t, &tick.measured).encode())?;
+            bag.put(RunLogTopics::DESIRED_POSE, t, &pose(t, &tick.desired).encode())?;
+            let w = &tick.wrench_base;
+            let wrench = WrenchStamped {
+                header: header(t, BASE_FRAME),
+                force: [-w[0], -w[1], -w[2]],
+                torque: [-w[3], -w[4], -w[5]],
+            };
+            bag.put(RunLogTopics::WRENCH, t, &wrench.encode())?;
+            let state = log.states.get(tick.state as usize).map_or("?", String::as_str);
+            let state = match step {
+                Some(step) => format!("{step}/{state}"),
+                None => state.to_owned(),
+            };
+            if last_state.as_deref() != Some(state.as_str()) {
+                bag.put(RunLogTopics::STATE, t, &encode_string(&state))?;
+                last_state = Some(state);
+            }
+        }
+    }
+    bag.finish()
+}

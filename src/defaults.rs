@@ -34,6 +34,7 @@ const FILES: &[(&str, &str)] = &[
         "stdlib-skills/contour.skill",
         include_str!("../stdlib-skills/contour.skill"),
     ),
+    ("stdlib-skills/wipe.skill", include_str!("../stdlib-skills/wipe.skill")),
     (
         "examples/scenes/table.toml",
         include_str!("../examples/scenes/table.toml"),

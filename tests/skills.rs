@@ -301,3 +301,93 @@ fn a_tool_starting_inside_an_object_is_refused_with_the_object_named() {
     let message = err.to_string();
     assert!(message.contains("inside object `table`"), "{message}");
 }
+
+/// The turning points of the measured tool x in state `state` (a reversal counts once the tool
+/// has come back 2 cm), as times \[s\].
+fn reversals(log: &RunLog, state: &str) -> Vec<f64> {
+    let index = log.states.iter().position(|s| s == state).expect("the state ran") as u32;
+    let path: Vec<(f64, f64)> = log
+        .ticks
+        .iter()
+        .filter(|tick| tick.state == index)
+        .map(|tick| (tick.t_s, tick.measured[0]))
+        .collect();
+    let (mut high, mut low, mut heading, mut turns) = (0, 0, 0, Vec::new());
+    for k in 1..path.len() {
+        if path[k].1 > path[high].1 {
+            high = k;
+        }
+        if path[k].1 < path[low].1 {
+            low = k;
+        }
+        if heading >= 0 && path[high].1 - path[k].1 > 0.02 {
+            if heading == 1 {
+                turns.push(path[high].0);
+            }
+            heading = -1;
+            low = k;
+        } else if heading <= 0 && path[k].1 - path[low].1 > 0.02 {
+            if heading == -1 {
+                turns.push(path[low].0);
+            }
+            heading = 1;
+            high = k;
+        }
+    }
+    turns
+}
+
+#[test]
+fn wipe_learns_its_four_strokes_and_reproduces_them_or_as_many_as_asked() {
+    let (mut skill, learned) = learned("wipe");
+    let strokes = &learned.motions["strokes"];
+    assert_eq!(strokes.strokes.len(), 4, "the demonstration wipes four strokes");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("examples/demos/wipe.truth.json")).expect("truth"))
+            .expect("truth parses");
+    let turns: Vec<f64> = truth["turns_s"]
+        .as_array()
+        .expect("turns")
+        .iter()
+        .map(|v| v.as_f64().expect("a time"))
+        .collect();
+    let found = &learned.quality.motions["strokes"].strokes_s;
+    for (stroke, turn) in found.windows(2).zip(&turns) {
+        // A stroke ends where the next begins; a minimum-jerk stroke is flat at its ends, so
+        // the turning sample may sit a little along the flat part.
+        assert_eq!(stroke[0][1], stroke[1][0]);
+        assert!(
+            (stroke[0][1] - turn).abs() < 0.06,
+            "turn at {} s, truth {turn} s",
+            stroke[0][1]
+        );
+    }
+    let bound = peak_bound("wipe");
+    for (set, runs) in [
+        ("table.z=0.275", None),
+        ("table.z=0.225", None),
+        ("table.z=0.245", Some(7)),
+    ] {
+        for state in &mut skill.states {
+            if let skill_ir::StateKind::Active(active) = &mut state.kind {
+                if state.name == "wipe" {
+                    active.repeat = runs;
+                }
+            }
+        }
+        let (report, log, metrics) = run(&skill, &learned, "table.toml", &[set], false);
+        assert_eq!(report.outcome, skill_ir::Outcome::Success, "{set}: {}", report.message);
+        let rms = metrics.force_rms_rel.expect("a contact phase");
+        eprintln!(
+            "wipe {set}, runs {runs:?}: force RMS {:.1} %, peak {:.1} N, reversals {:?}",
+            rms * 100.0,
+            metrics.peak_force_n,
+            reversals(&log, "wipe")
+        );
+        assert!(rms <= 0.10, "{set}: force RMS {rms}");
+        assert!(metrics.peak_force_n <= bound, "{set}: peak {}", metrics.peak_force_n);
+        let expected = runs.map_or(4, |n| n as usize) - 1;
+        assert_eq!(reversals(&log, "wipe").len(), expected, "{set}: runs {runs:?}");
+        assert_sane(&log);
+    }
+}

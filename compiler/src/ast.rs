@@ -197,6 +197,8 @@ pub enum StmtKind {
         /// How fast, if written (`at V`).
         speed: Option<Expr>,
     },
+    /// `repeat 4`.
+    Repeat(Expr),
     /// `on GUARD -> TARGET`.
     Transition {
         /// The guard.

@@ -135,6 +135,8 @@ codes! {
     /// `lift off 2 cm at 10 mm/s` in a state without `move`: only a state that leaves a contact
     /// on a learned path lifts off.
     LiftOffWithoutMove => "skill::check::lift_off_without_move", Error;
+    /// `repeat 3` in a state without `move`: there is no motion to repeat.
+    RepeatWithoutMove => "skill::check::repeat_without_move", Error;
     /// `for` on a guard that only counts time since entry: `on dwell 100 ms for 50 ms -> next`
     /// (that is `dwell 150 ms`).
     ForOnTimedGuard => "skill::check::for_on_timed_guard", Error;

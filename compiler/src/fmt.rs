@@ -324,6 +324,7 @@ fn statement(stmt: &StmtKind) -> String {
             Some(speed) => format!("lift off {} at {}", expr(distance), expr(speed)),
             None => format!("lift off {}", expr(distance)),
         },
+        StmtKind::Repeat(count) => format!("repeat {}", expr(count)),
         StmtKind::Transition { guard: g, target } => {
             let target = match target {
                 Target::State(name) => name.name.clone(),

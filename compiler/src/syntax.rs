@@ -167,7 +167,7 @@ fn join_or(items: &[&str]) -> String {
 
 /// The statements of a state, for "expected ..." messages.
 const STATEMENTS: &str =
-    "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `lift off`, `on`)";
+    "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `lift off`, `repeat`, `on`)";
 
 /// What a rule means to a user, for "expected ..." messages.
 fn rule_label(rule: Rule) -> Option<&'static str> {
@@ -193,7 +193,7 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
             STATEMENTS
         }
         Rule::gains_stmt | Rule::entry_stmt | Rule::approach_stmt | Rule::approach_kw | Rule::transition => STATEMENTS,
-        Rule::lift_off_stmt | Rule::lift_kw => STATEMENTS,
+        Rule::lift_off_stmt | Rule::lift_kw | Rule::repeat_stmt | Rule::repeat_kw => STATEMENTS,
         Rule::off_kw => "`off`",
         Rule::from_current => "`from current`",
         Rule::move_relative => "`relative`",
@@ -470,6 +470,10 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
             let distance = expr(inner.next().expect("grammar: lift off has a distance"));
             let speed = inner.next().map(expr);
             StmtKind::LiftOff { distance, speed }
+        }
+        Rule::repeat_stmt => {
+            let _keyword = inner.next().expect("grammar: repeat keyword");
+            StmtKind::Repeat(expr(inner.next().expect("grammar: repeat has a count")))
         }
         Rule::transition => {
             let guard_pair = inner.next().expect("grammar: transition has a guard");

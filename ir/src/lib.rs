@@ -24,7 +24,9 @@ use serde::{Deserialize, Serialize};
 /// - 2: skills and task steps may carry supervisor [`Limit`]s, active states an [`Approach`]
 ///   and a [`LiftOffSpec`], and guards may be [`Guard::Held`] (all optional: a version 1 file
 ///   reads as a version 2 file without them).
-pub const IR_VERSION: u32 = 2;
+/// - 3: a motion may be learned as [`Strokes`] and an active state may [`ActiveState::repeat`]
+///   its motion (both optional: a version 2 file reads as a version 3 file without them).
+pub const IR_VERSION: u32 = 3;
 
 /// A compiled `.skill` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -480,8 +482,20 @@ pub struct MotionDecl {
     pub segment: SegmentIdx,
     /// Gaussian basis functions per channel.
     pub basis: u32,
+    /// `strokes(...)`: the segment is also cut into strokes at the reversals of its motion, and
+    /// each stroke learned as a motion of its own (a wipe's back-and-forth, a circle's halves).
+    /// Left out of the JSON when the motion is a plain `dmp`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strokes: Option<Strokes>,
     /// Where it is declared.
     pub span: SourceSpan,
+}
+
+/// How a motion's segment is cut into strokes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Strokes {
+    /// A stroke shorter than this is merged into its neighbour \[s\].
+    pub min_length_s: f64,
 }
 
 /// A named desired force.
@@ -718,6 +732,10 @@ pub struct ActiveState {
     /// and approaches no contact lifts off. Left out of the JSON when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lift_off: Option<LiftOffSpec>,
+    /// `repeat N`: run the state's motion N times, each from where the last ended (a motion
+    /// learned as strokes runs N strokes). `None`: once, or a strokes motion's demonstrated count.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeat: Option<u32>,
 }
 
 /// A declared lift-off (`lift off 2 cm at 10 mm/s`): on entering the state in contact the tool

@@ -48,11 +48,19 @@ pub enum StdSkill {
     Slide,
     /// Follow the drum's curved surface with a varying force.
     Contour,
+    /// Wipe the table back and forth with a constant force: several strokes in one contact.
+    Wipe,
 }
 
 impl StdSkill {
-    /// All four, in the order the thesis presents them last to first.
-    pub const ALL: [StdSkill; 4] = [StdSkill::Touch, StdSkill::Press, StdSkill::Slide, StdSkill::Contour];
+    /// All five: the thesis's four, in the order it presents them last to first, then the wipe.
+    pub const ALL: [StdSkill; 5] = [
+        StdSkill::Touch,
+        StdSkill::Press,
+        StdSkill::Slide,
+        StdSkill::Contour,
+        StdSkill::Wipe,
+    ];
 
     /// The skill's name (also its file stem).
     pub fn name(self) -> &'static str {
@@ -61,13 +69,14 @@ impl StdSkill {
             StdSkill::Press => "press",
             StdSkill::Slide => "slide",
             StdSkill::Contour => "contour",
+            StdSkill::Wipe => "wipe",
         }
     }
 
     /// The shipped scene it is demonstrated in.
     pub fn scene(self) -> &'static str {
         match self {
-            StdSkill::Touch | StdSkill::Slide => "table.toml",
+            StdSkill::Touch | StdSkill::Slide | StdSkill::Wipe => "table.toml",
             StdSkill::Press => "button.toml",
             StdSkill::Contour => "cylinder.toml",
         }
@@ -80,6 +89,7 @@ impl StdSkill {
             StdSkill::Press => 12,
             StdSkill::Slide => 13,
             StdSkill::Contour => 14,
+            StdSkill::Wipe => 15,
         }
     }
 }
@@ -162,6 +172,9 @@ pub struct GroundTruth {
     pub sensor_noise_n: f64,
     /// The constant sensor bias added to the force \[N\].
     pub sensor_bias_n: [f64; 3],
+    /// Where the strokes of a multi-stroke contact turn \[s\] (empty for the others).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub turns_s: Vec<f64>,
 }
 
 /// A generated demonstration.
@@ -261,11 +274,14 @@ fn free(from: Vector3<f64>, to: Vector3<f64>, warp_amount: f64) -> Box<dyn Fn(f6
     })
 }
 
-/// Holding still at `at` for 0.4 s, as a person does before and after a demonstration.
+/// How long a person holds still before and after a demonstration \[s\].
+const REST_S: f64 = 0.4;
+
+/// Holding still at `at` for [`REST_S`], as a person does before and after a demonstration.
 fn rest(at: Vector3<f64>) -> Phase {
     Phase {
         label: "rest",
-        duration_s: 0.4,
+        duration_s: REST_S,
         state: free(at, at, 0.0),
     }
 }
@@ -286,6 +302,7 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
     let contact_z = SURFACE_Z_M + TIP_RADIUS_M;
     let warp_of = |rng: &mut SplitMix64| rng.range(-0.15, 0.15);
     let mut phases: Vec<Phase> = Vec::new();
+    let mut turns_s = Vec::new();
     let surface;
     let friction;
     let force_n;
@@ -326,6 +343,66 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                 }),
             });
             phases.push(moving("leave", rng.range(1.4, 1.7), c2, leave, w3));
+            phases.push(rest(leave));
+            surface = TruthSurface::Plane {
+                point_m: [0.55, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
+        }
+        StdSkill::Wipe => {
+            friction = 0.4;
+            let f0 = 8.0;
+            force_n = f0;
+            let hover = Vector3::new(0.50, -0.06, 0.365);
+            let c1 = Vector3::new(0.50, -0.06, contact_z);
+            let c2 = Vector3::new(0.60, 0.04, contact_z);
+            let leave = Vector3::new(0.52, -0.04, 0.37);
+            let (w1, w3) = (warp_of(&mut rng), warp_of(&mut rng));
+            // Four strokes: out, back, out, back, each with its own timing and a sideways bow
+            // (a hand does not retrace its path).
+            let strokes: Vec<(f64, f64, f64)> = (0..4)
+                .map(|_| (rng.range(0.9, 1.2), warp_of(&mut rng), rng.range(-0.012, 0.012)))
+                .collect();
+            let settle = 0.25;
+            let wiping_s: f64 = strokes.iter().map(|s| s.0).sum();
+            let contact_s = settle + wiping_s + settle;
+            let approach_s = rng.range(1.5, 1.8);
+            let mut at = REST_S + approach_s + settle;
+            for stroke in &strokes[..strokes.len() - 1] {
+                at += stroke.0;
+                turns_s.push(at);
+            }
+            let slow_phase = rng.range(0.0, 2.0 * PI);
+            let side = Vector3::new(-(c2 - c1).y, (c2 - c1).x, 0.0).normalize();
+            phases.push(rest(hover));
+            phases.push(moving("approach", approach_s, hover, c1, w1));
+            phases.push(Phase {
+                label: "wipe",
+                duration_s: contact_s,
+                state: Box::new(move |u, t| {
+                    let local = u * contact_s;
+                    let mut begin = settle;
+                    let mut along = 0.0;
+                    let mut bow = 0.0;
+                    for (k, (duration, warp_amount, sway)) in strokes.iter().enumerate() {
+                        if local >= begin {
+                            let progress = min_jerk(warp(((local - begin) / duration).clamp(0.0, 1.0), *warp_amount));
+                            along = if k.is_multiple_of(2) { progress } else { 1.0 - progress };
+                            bow = sway * (PI * progress).sin();
+                        }
+                        begin += duration;
+                    }
+                    let position = c1 + (c2 - c1) * along + side * bow;
+                    let mut force = touch_down_lift_off(local, contact_s, f0);
+                    force *= 1.0 + 0.04 * (2.0 * PI * 0.7 * t + slow_phase).sin();
+                    TipState {
+                        position,
+                        normal: up,
+                        normal_force: force,
+                    }
+                }),
+            });
+            phases.push(moving("leave", rng.range(1.4, 1.7), c1, leave, w3));
             phases.push(rest(leave));
             surface = TruthSurface::Plane {
                 point_m: [0.55, 0.0, SURFACE_Z_M],
@@ -553,6 +630,7 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             friction,
             sensor_noise_n: force_noise,
             sensor_bias_n: bias.into(),
+            turns_s,
         },
     }
 }

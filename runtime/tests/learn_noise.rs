@@ -17,6 +17,7 @@ fn two_motions() -> ir::Skill {
         name: name.into(),
         segment: ir::SegmentIdx(segment),
         basis: 50,
+        strokes: None,
         span: span(),
     };
     ir::Skill {

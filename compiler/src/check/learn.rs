@@ -2,7 +2,7 @@
 //! order (segments, then frames, motions, forces and thresholds); motions and DMP bases.
 
 use super::scope::{SkillScope, Sym, SymKind, BUILTIN_FRAMES};
-use super::signatures::{Produces, Signature};
+use super::signatures::{Function, Produces, Signature};
 use super::values::Args;
 use super::Checker;
 use crate::ast::{self, ExprKind, LearnKind};
@@ -12,6 +12,10 @@ use skill_ir as ir;
 
 /// Default number of DMP basis functions of a motion.
 pub const DEFAULT_MOTION_BASIS: u32 = 50;
+
+/// The default shortest stroke of `strokes(...)` \[s\]: a hand-guided stroke takes a few
+/// tenths of a second at least; shorter runs between reversals are jitter at a turn.
+pub(super) const DEFAULT_STROKE_MIN_LENGTH_S: f64 = 0.15;
 
 /// Default number of DMP basis functions of a force profile.
 pub const DEFAULT_FORCE_BASIS: u32 = 30;
@@ -139,10 +143,11 @@ impl Checker<'_> {
                     None => ok = false,
                 },
                 LearnKind::Motion => match self.motion(&decl.value, scope) {
-                    Some((segment, basis)) => motions.push(ir::MotionDecl {
+                    Some((segment, basis, strokes)) => motions.push(ir::MotionDecl {
                         name: name.name.clone(),
                         segment,
                         basis,
+                        strokes,
                         span,
                     }),
                     None => ok = false,
@@ -208,7 +213,13 @@ impl Checker<'_> {
         Some(n)
     }
 
-    fn motion(&mut self, expr: &ast::Expr, scope: &mut SkillScope) -> Option<(ir::SegmentIdx, u32)> {
+    /// A motion's source: `dmp(segment N [, basis: B])` or `strokes(segment N [, basis: B,
+    /// min_length: T])`, as the segment, the basis count and the strokes, if any.
+    fn motion(
+        &mut self,
+        expr: &ast::Expr,
+        scope: &mut SkillScope,
+    ) -> Option<(ir::SegmentIdx, u32, Option<ir::Strokes>)> {
         let (name, args) = match &expr.kind {
             ExprKind::Call { name, args } => (name, Some(args)),
             ExprKind::Name(name) => (name, None),
@@ -239,7 +250,20 @@ impl Checker<'_> {
         };
         let args = self.bind(sig, expr.span, args);
         let segment = self.required_segment(&args, scope);
+        let strokes = match sig.function {
+            Function::Strokes => {
+                let min_length_s = match args.get("min_length") {
+                    Some(expr) => {
+                        let value = self.quantity(expr, Dim::Time, "the minimum stroke length");
+                        self.positive(value, expr.span, "the minimum stroke length")?
+                    }
+                    None => DEFAULT_STROKE_MIN_LENGTH_S,
+                };
+                Some(ir::Strokes { min_length_s })
+            }
+            _ => None,
+        };
         let basis = self.basis(&args, DEFAULT_MOTION_BASIS);
-        Some((segment?, basis?))
+        Some((segment?, basis?, strokes))
     }
 }

@@ -46,6 +46,7 @@ pub(super) enum Function {
     ForceAligned,
     Fixed,
     Dmp,
+    Strokes,
     Constant,
     ForceAt,
     Magnitude,
@@ -135,6 +136,7 @@ pub(super) const LEARN_FUNCTIONS: &[Signature] = &[
     sig("fixed", P::Frame, F::Fixed, &["origin", "rpy"], 0, "fixed(origin: [0 m, 0 m, 0.1 m])"),
 
     sig("dmp", P::Motion, F::Dmp, &["segment", "basis"], 1, "dmp(segment 1)"),
+    sig("strokes", P::Motion, F::Strokes, &["segment", "basis", "min_length"], 1, "strokes(segment 2)").aka(&["stroke", "periodic", "cycles"]),
 
     sig("constant", P::Force, F::Constant, &["segment", "along"], 1, "constant(segment 2, along: surface.z)"),
     sig("force_at", P::Force, F::ForceAt, &["point", "along"], 1, "force_at(end(segment 1), along: contact.z)"),

@@ -11,6 +11,10 @@ use crate::units::Dim;
 use skill_ir as ir;
 use std::collections::HashMap;
 
+/// The most times a state may repeat its motion: it bounds the work a run does, and a thousand
+/// strokes is already hours of wiping.
+pub(super) const MAX_REPEAT: u32 = 1000;
+
 /// Default stiffness per axis in the compliant frame: N/m for x y z, Nm/rad for rx ry rz.
 /// Values of the order used for Cartesian impedance control on the LWR-IV.
 pub const DEFAULT_STIFFNESS: [f64; 6] = [1500.0, 1500.0, 1500.0, 150.0, 150.0, 150.0];
@@ -170,6 +174,8 @@ impl Checker<'_> {
         let mut approach_span = None;
         let mut lift_off = None;
         let mut lift_off_span = None;
+        let mut repeat = None;
+        let mut repeat_span = None;
         let mut state_transitions: Vec<(ir::Transition, &ast::Guard, Span)> = Vec::new();
 
         for stmt in stmts {
@@ -182,6 +188,7 @@ impl Checker<'_> {
                 StmtKind::Entry(_) => Some("entry"),
                 StmtKind::Approach { .. } => Some("approach"),
                 StmtKind::LiftOff { .. } => Some("lift off"),
+                StmtKind::Repeat(_) => Some("repeat"),
                 StmtKind::Transition { .. } => None,
             };
             if let Some(keyword) = keyword {
@@ -244,6 +251,10 @@ impl Checker<'_> {
                 StmtKind::LiftOff { distance, speed } => {
                     lift_off_span = Some(stmt.span);
                     lift_off = self.lift_off(distance, speed.as_ref(), stmt.span);
+                }
+                StmtKind::Repeat(count) => {
+                    repeat_span = Some(stmt.span);
+                    repeat = self.repeat_count(count);
                 }
                 StmtKind::Transition { guard, target } => {
                     let resolved_guard = self.guard(guard, scope);
@@ -325,6 +336,17 @@ impl Checker<'_> {
                 });
             self.lift_off_use(state, span, writes_move, lifts && (has_force_axes || approaches));
         }
+        if let (Some(span), false) = (repeat_span, writes_move) {
+            let diag = self
+                .diag(
+                    Code::RepeatWithoutMove,
+                    span,
+                    format!("state `{}` repeats but runs no motion", state.name.name),
+                    "nothing to repeat",
+                )
+                .help("add `move MOTION` to this state: `repeat N` runs its motion N times");
+            self.report(diag);
+        }
         self.transition_analysis(state, &state_transitions, writes_move, force, has_force_axes, scope);
 
         if self.error_count() > errors_before {
@@ -348,7 +370,26 @@ impl Checker<'_> {
             transitions: ids_out,
             approach,
             lift_off,
+            repeat,
         })
+    }
+
+    /// `repeat N`: a whole number from 1 to [`MAX_REPEAT`].
+    fn repeat_count(&mut self, count: &ast::Expr) -> Option<u32> {
+        let n = self.count(count, "the repeat count")?;
+        if n > MAX_REPEAT {
+            let diag = self
+                .diag(
+                    Code::OutOfRange,
+                    count.span,
+                    format!("a state repeats its motion at most {MAX_REPEAT} times"),
+                    "too many",
+                )
+                .help("split the work into several task steps, or repeat fewer times");
+            self.report(diag);
+            return None;
+        }
+        Some(n)
     }
 
     /// `approach within D at V`: a positive distance and a positive speed.

@@ -15,11 +15,34 @@ use crate::control::Command;
 use crate::dmp::{DmpError, DmpRollout};
 use crate::skill::LearnedForce;
 
-/// A running motion: which one, and its rollouts.
+/// A running motion: which one, which of its runs (`repeat`, strokes), and the rollouts of
+/// that run.
 struct RunningMotion {
     /// Index into the bound skill's motions.
     id: usize,
     rollout: MotionRollout,
+    /// The run now (0-based): which piece of the motion runs ([`crate::skill::LearnedMotion::piece`]).
+    run: usize,
+    /// How many runs the state makes.
+    runs: usize,
+    /// The goal offset every run is started with (fixed at entry) \[m\].
+    offset: Vector3<f64>,
+    /// The speed override, the tool speed limit and the flange-to-tool lever every run is
+    /// started with.
+    speed: f64,
+    max_tool_speed_mps: f64,
+    lever_m: f64,
+}
+
+impl RunningMotion {
+    /// Whether the last run has run out.
+    fn finished(&self) -> bool {
+        self.run + 1 >= self.runs && self.run_finished()
+    }
+
+    fn run_finished(&self) -> bool {
+        self.rollout.position.time_s() >= self.rollout.position.tau_s()
+    }
 }
 
 /// A running goal extension (touch/press case II).
@@ -358,11 +381,17 @@ impl<'b, 'a> Machine<'b, 'a> {
             } else {
                 Vector3::from(self.overrides.goal_offset_m)
             };
-            let rollout = MotionRollout::start(learned, &flange, offset.into(), speed, max_speed, lever)
+            let rollout = MotionRollout::start(learned.piece(0), &flange, offset.into(), speed, max_speed, lever)
                 .map_err(|err| self.motion_error(&self.skill().learn.motions[motion_id.index()].name, &err))?;
             self.motion = Some(RunningMotion {
                 id: motion_id.index(),
                 rollout,
+                run: 0,
+                runs: active.repeat.map_or(learned.default_runs(), |n| n as usize),
+                offset,
+                speed,
+                max_tool_speed_mps: max_speed,
+                lever_m: lever,
             });
         }
         if let Some(force_id) = active.force {
@@ -384,6 +413,7 @@ impl<'b, 'a> Machine<'b, 'a> {
                     let shift = axis * *distance_m;
                     match &mut self.motion {
                         Some(motion) => {
+                            motion.offset += shift;
                             motion.rollout.goal += shift;
                             let goal = motion.rollout.goal;
                             let result = motion.rollout.position.set_goal(goal.as_slice());
@@ -462,10 +492,7 @@ impl<'b, 'a> Machine<'b, 'a> {
 
     /// Whether every DMP of the state has run out (and any extension is used up and settled).
     fn motion_done(&self, t: f64) -> bool {
-        let motion_finished = self
-            .motion
-            .as_ref()
-            .is_none_or(|m| m.rollout.position.time_s() >= m.rollout.position.tau_s());
+        let motion_finished = self.motion.as_ref().is_none_or(RunningMotion::finished);
         let profile_finished = self.force_profile.as_ref().is_none_or(|p| p.time_s() >= p.tau_s());
         let runs_something = self.motion.is_some() || self.force_profile.is_some();
         let extension_finished = self
@@ -607,8 +634,11 @@ impl<'b, 'a> Machine<'b, 'a> {
                 return Ok(());
             }
         }
+        if self.motion.as_ref().is_some_and(|m| m.run_finished() && !m.finished()) {
+            self.next_run()?;
+        }
         if let Some(motion) = &mut self.motion {
-            let learned = self.bound.motions[motion.id];
+            let learned = self.bound.motions[motion.id].piece(motion.run);
             // Guarded approach: near the goal, run the motion's clock slower (a DMP's time
             // scaling), so the desired speed stays at the contact-safe speed.
             // Not during a search: its goal moves at the search speed already.
@@ -635,6 +665,30 @@ impl<'b, 'a> Machine<'b, 'a> {
                 });
         if let (Some(profile), Some(dmp)) = (&mut self.force_profile, profile_dmp) {
             profile.step(dmp, dt * profile_rate(sensed.force_lag_n));
+        }
+        Ok(())
+    }
+
+    /// Starts the next run of the state's motion where the last one ended (its commanded
+    /// flange pose), towards the next piece's goal moved by the offset fixed at entry: runs
+    /// chain without a jump and do not drift.
+    fn next_run(&mut self) -> Result<(), ExecError> {
+        let Some(motion) = &self.motion else { return Ok(()) };
+        let learned = self.bound.motions[motion.id];
+        let run = motion.run + 1;
+        let from = motion.rollout.flange();
+        let started = MotionRollout::start(
+            learned.piece(run),
+            &from,
+            motion.offset.into(),
+            motion.speed,
+            motion.max_tool_speed_mps,
+            motion.lever_m,
+        );
+        let rollout = started.map_err(|err| self.motion_error(&self.skill().learn.motions[motion.id].name, &err))?;
+        if let Some(motion) = &mut self.motion {
+            motion.rollout = rollout;
+            motion.run = run;
         }
         Ok(())
     }

@@ -148,6 +148,7 @@ mod tests {
             segment: 0,
             position: Dmp::fit_points(&config, &t_s, &points).expect("fits"),
             orientation: QuatDmp::fit(&config, &t_s, &orientation).expect("fits"),
+            strokes: Vec::new(),
         }
     }
 

@@ -27,6 +27,7 @@ pub mod constraint;
 pub mod force;
 pub mod ir_seam;
 pub mod segment;
+pub mod strokes;
 
 #[cfg(test)]
 pub(crate) mod testutil;

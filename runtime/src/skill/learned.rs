@@ -21,7 +21,9 @@ pub const LEARNED_VERSION: u32 = 1;
 /// used with the IR it was learned for. The skill's `limits { }` are left out: like `--limit`,
 /// they tune the supervisor and change nothing learned, so tightening one needs no new learning.
 pub fn ir_hash(skill: &skill_ir::Skill) -> String {
-    // Spans and docs do not change what is learned or run: hash the rest.
+    // Spans and docs do not change what is learned or run, nor do the skill's limits or how often
+    // a state repeats its motion (`repeat`): hash the rest, so that changing those needs no new
+    // learning.
     let mut value = serde_json::to_value(skill).unwrap_or_default();
     if let serde_json::Value::Object(map) = &mut value {
         map.remove("limits");
@@ -41,6 +43,7 @@ fn strip_positions(value: &mut serde_json::Value) {
         serde_json::Value::Object(map) => {
             map.remove("span");
             map.remove("doc");
+            map.remove("repeat");
             map.values_mut().for_each(strip_positions);
         }
         serde_json::Value::Array(items) => items.iter_mut().for_each(strip_positions),
@@ -260,6 +263,30 @@ pub struct LearnedMotion {
     pub position: Dmp,
     /// Orientation DMP, base frame.
     pub orientation: QuatDmp,
+    /// A motion learned as `strokes(...)`: each stroke of the segment as a motion of its own, in
+    /// time order (their own `strokes` empty). Empty for a plain `dmp` motion.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strokes: Vec<LearnedMotion>,
+}
+
+impl LearnedMotion {
+    /// What the `index`-th run (0-based) of this motion runs in a state that repeats it: the
+    /// motion itself, or for a strokes motion the `index`-th demonstrated stroke and, past the
+    /// last, the last two strokes alternately (so a back-and-forth stays back and forth).
+    pub fn piece(&self, index: usize) -> &LearnedMotion {
+        let k = self.strokes.len();
+        match k {
+            0 => self,
+            1 => &self.strokes[0],
+            _ if index < k => &self.strokes[index],
+            _ => &self.strokes[k - 2 + (index - k) % 2],
+        }
+    }
+
+    /// How many runs a state without `repeat` makes: the demonstrated strokes, or one.
+    pub fn default_runs(&self) -> usize {
+        self.strokes.len().max(1)
+    }
 }
 
 /// A learned desired force. Scalar forces act along the z axis of the state's control frame.
@@ -379,6 +406,10 @@ pub struct MotionQuality {
     /// Peak speed of the demonstrated segment, smoothed \[m/s\].
     #[serde(default)]
     pub demo_peak_speed_mps: f64,
+    /// A strokes motion's strokes as `[start, end]` in demonstration time \[s\] (empty for a
+    /// plain motion).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strokes_s: Vec<[f64; 2]>,
 }
 
 /// One constraint model's fit on a segment.

@@ -21,6 +21,9 @@ pub const MAX_VALUE: f64 = 1e6;
 pub const MAX_WEIGHT: f64 = 1e9;
 /// Most poses of a per-sample frame.
 pub const MAX_FRAME_SAMPLES: usize = 1_000_000;
+/// The most strokes a learned motion may hold: a demonstration of at most 600 s with strokes of
+/// at least a few hundredths of a second.
+pub const MAX_STROKES: usize = 10_000;
 /// How far a quaternion's norm may be from 1.
 const UNIT_TOLERANCE: f64 = 1e-3;
 
@@ -134,6 +137,23 @@ impl Learned {
             }
             dmp_ok(&format!("{field}.position"), &motion.position, Some(3))?;
             quat_dmp_ok(&format!("{field}.orientation"), &motion.orientation)?;
+            if motion.strokes.len() > MAX_STROKES {
+                return Err(bad(
+                    format!("{field}.strokes"),
+                    format!("has {} strokes, more than {MAX_STROKES}", motion.strokes.len()),
+                ));
+            }
+            for (index, stroke) in motion.strokes.iter().enumerate() {
+                let field = format!("{field}.strokes[{index}]");
+                if !stroke.strokes.is_empty() || stroke.segment != motion.segment {
+                    return Err(bad(
+                        field,
+                        "a stroke has no strokes of its own and lies in its motion's segment".to_string(),
+                    ));
+                }
+                dmp_ok(&format!("{field}.position"), &stroke.position, Some(3))?;
+                quat_dmp_ok(&format!("{field}.orientation"), &stroke.orientation)?;
+            }
         }
         for (name, force) in &self.forces {
             let field = format!("forces.{name}");
@@ -307,6 +327,7 @@ mod tests {
                 segment: 0,
                 position,
                 orientation,
+                strokes: Vec::new(),
             },
         );
         Learned {

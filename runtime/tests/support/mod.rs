@@ -82,6 +82,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
         name: name.into(),
         segment: ir::SegmentIdx(segment),
         basis: 50,
+        strokes: None,
         span: span(),
     };
     let stiffness = [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0];
@@ -99,6 +100,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
                 transitions: transitions.iter().map(|id| ir::TransitionId(*id)).collect(),
                 approach,
                 lift_off,
+                repeat: None,
             }))
         };
     let gains = ir::ForceGains {

@@ -1,4 +1,5 @@
-//! Learning a plan's motions: a position DMP and a quaternion DMP per segment, with their
+//! Learning a plan's motions: a position DMP and a quaternion DMP per segment (and per stroke of
+//! a `strokes` motion, cut by [`find_strokes`]), with their
 //! reconstruction error and the plausibility checks of docs/method.md §2 (warn, or refuse).
 
 use nalgebra::Vector3;
@@ -8,6 +9,7 @@ use super::smoothing::{smooth_points, smoothing_window};
 use super::{LearnError, Learner};
 use crate::demo::Smoothing;
 use crate::dmp::{Dmp, DmpConfig, QuatDmp};
+use crate::learn::strokes::find_strokes;
 use crate::skill::learned::{LearnedMotion, MotionQuality};
 
 /// Reconstruction error (3-D RMS) above which `learn` warns \[m\]. A 50-basis fit of a smooth
@@ -35,18 +37,65 @@ impl Learner<'_> {
     pub(super) fn motion(&mut self, decl: &ir::MotionDecl) -> Result<LearnedMotion, LearnError> {
         let seg = self.seg(decl.segment);
         let t = self.segment_times(seg, &decl.name, decl.segment.index())?;
+        let demo = self.demo;
+        let positions = &demo.position_m[seg.range()];
+        let (mut motion, mut quality) = self.fit_motion(decl, &decl.name, seg.range())?;
+        if let Some(spec) = decl.strokes {
+            // The strokes are what runs: the motion's quality is theirs, the worst of each
+            // figure (the whole segment's fit serves only to place the motion's start and end).
+            quality.position_rms_m = [0.0; 3];
+            quality.orientation_rms_rad = 0.0;
+            quality.peak_speed_mps = 0.0;
+            quality.demo_peak_speed_mps = 0.0;
+            for stroke in find_strokes(&t, positions, spec.min_length_s) {
+                let range = seg.start + stroke.start..seg.start + stroke.end;
+                let name = format!("{} stroke {}", decl.name, motion.strokes.len() + 1);
+                if range.len() < 5 {
+                    return Err(LearnError::TooShort {
+                        segment: decl.segment.index() + 1,
+                        samples: range.len(),
+                        name,
+                    });
+                }
+                let (piece, part) = self.fit_motion(decl, &name, range.clone())?;
+                self.check_plausible(&name, &part)?;
+                quality.strokes_s.push([demo.t_s[range.start], demo.t_s[range.end - 1]]);
+                for (whole, part) in quality.position_rms_m.iter_mut().zip(part.position_rms_m) {
+                    *whole = whole.max(part);
+                }
+                quality.orientation_rms_rad = quality.orientation_rms_rad.max(part.orientation_rms_rad);
+                quality.peak_speed_mps = quality.peak_speed_mps.max(part.peak_speed_mps);
+                quality.demo_peak_speed_mps = quality.demo_peak_speed_mps.max(part.demo_peak_speed_mps);
+                motion.strokes.push(piece);
+            }
+        } else {
+            self.check_plausible(&decl.name, &quality)?;
+        }
+        self.quality.motions.insert(decl.name.clone(), quality);
+        Ok(motion)
+    }
+
+    /// Fits the position and quaternion DMPs of `decl` to the samples `range` and measures the
+    /// fit (reconstruction at the samples' own times, peak speeds).
+    fn fit_motion(
+        &self,
+        decl: &ir::MotionDecl,
+        name: &str,
+        range: std::ops::Range<usize>,
+    ) -> Result<(LearnedMotion, MotionQuality), LearnError> {
+        let t = &self.demo.t_s[range.clone()];
         let config = DmpConfig {
             n_basis: decl.basis as usize,
             ..DmpConfig::default()
         };
         let wrap = |source| LearnError::Dmp {
-            name: decl.name.clone(),
+            name: name.to_string(),
             source,
         };
-        let positions = &self.demo.position_m[seg.range()];
-        let orientations = &self.demo.orientation[seg.range()];
-        let position = Dmp::fit_points(&config, &t, positions).map_err(wrap)?;
-        let orientation = QuatDmp::fit(&config, &t, orientations).map_err(wrap)?;
+        let positions = &self.demo.position_m[range.clone()];
+        let orientations = &self.demo.orientation[range];
+        let position = Dmp::fit_points(&config, t, positions).map_err(wrap)?;
+        let orientation = QuatDmp::fit(&config, t, orientations).map_err(wrap)?;
 
         // Reconstruction: roll out at the demonstration's own sample times.
         let mut rollout = position.rollout();
@@ -73,15 +122,16 @@ impl Learner<'_> {
             position_rms_m: sum.map(|s| (s / count).sqrt()),
             orientation_rms_rad: (sum_rot / count).sqrt(),
             peak_speed_mps: peak_speed,
-            demo_peak_speed_mps: peak_speed_of(&t, positions),
+            demo_peak_speed_mps: peak_speed_of(t, positions),
+            strokes_s: Vec::new(),
         };
-        self.check_plausible(&decl.name, &quality)?;
-        self.quality.motions.insert(decl.name.clone(), quality);
-        Ok(LearnedMotion {
+        let motion = LearnedMotion {
             segment: decl.segment.index(),
             position,
             orientation,
-        })
+            strokes: Vec::new(),
+        };
+        Ok((motion, quality))
     }
 
     /// Warns about, or refuses, a motion whose reconstruction or speed is implausible.

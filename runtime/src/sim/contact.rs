@@ -115,8 +115,15 @@ impl RapierPlant {
     pub(super) fn sense_contacts(&mut self, dt: f64) {
         self.sense_arm_contacts();
         let ideal = self.contact_wrench();
+        self.read_sensor(ideal, self.sensor_rotation(), dt);
+    }
+
+    /// Passes the contact wrench `ideal` (about the sensor origin, base axes) through the wrist
+    /// sensor whose frame has rotation `sensor_in_base`, storing the ideal wrench and the
+    /// sensor's reading in sensor and base axes.
+    pub(super) fn read_sensor(&mut self, ideal: Vector6<f64>, sensor_in_base: Rotation3<f64>, dt: f64) {
         self.ideal_wrench_base = ideal;
-        let rot_t = self.sensor_rotation().inverse();
+        let rot_t = sensor_in_base.inverse();
         let force = rot_t * Vector3::new(ideal[0], ideal[1], ideal[2]);
         let moment = rot_t * Vector3::new(ideal[3], ideal[4], ideal[5]);
         let ideal_sensor = Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z);

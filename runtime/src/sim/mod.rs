@@ -5,6 +5,7 @@
 mod build;
 mod contact;
 mod convert;
+mod free_flight;
 mod rapier_plant;
 mod scene;
 mod sensor;

@@ -467,6 +467,8 @@ fn eval_real_learns_from_a_folder_of_demonstrations_and_scores_the_segmentation(
     assert!(errors.iter().all(|e| *e < 0.2), "boundary errors {errors:?}");
     let force = wipe["force_n"].as_f64().expect("force");
     assert!((force - 10.0).abs() < 0.5, "learned {force} N");
+    // The wipe template reads the slide's one pass as one stroke.
+    assert_eq!(wipe["strokes"], 1, "{wipe}");
     assert!(
         wipe["reproduction"]
             .as_str()

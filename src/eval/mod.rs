@@ -45,7 +45,7 @@ pub struct EvalArgs {
     /// Skip the replay baseline.
     #[arg(long)]
     pub no_replay: bool,
-    /// Also learn the slide skill from every real demonstration in this folder (CSV files like
+    /// Also learn the wipe skill from every real demonstration in this folder (CSV files like
     /// ../shared/data/lasa_wiping_lwr4/csv/), compare with `segment_labels.csv` there, and
     /// reproduce each on a table at the learned plane.
     #[arg(long, value_name = "DIR")]
@@ -593,10 +593,10 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
     let real = match &args.real {
         Some(dir) => {
             let root = crate::defaults::root().map_err(Failure::Usage)?;
-            let (_, slide) = load_skill(&root.join("stdlib-skills/slide.skill"), None)?;
+            let (_, wipe) = load_skill(&root.join("stdlib-skills/wipe.skill"), None)?;
             let table = root.join("examples/scenes/table.toml");
             let results = pool
-                .install(|| real::evaluate(dir, &slide, &table))
+                .install(|| real::evaluate(dir, &wipe, &table))
                 .map_err(Failure::Usage)?;
             crate::out::print(&report::real_table(&results))?;
             results

@@ -1,4 +1,5 @@
-//! `skillc eval --real DIR`: learn a slide skill from each usable real demonstration in a folder
+//! `skillc eval --real DIR`: learn the wipe skill (approach, strokes in contact, retreat) from each
+//! usable real demonstration in a folder
 //! shaped like the LASA wiping data (`*.csv` with skillc's demonstration columns, optional
 //! `segment_labels.csv`), compare the segmentation with the authors' labels, and reproduce
 //! each on a table whose top is the learned plane.
@@ -39,6 +40,11 @@ pub struct RealResult {
     pub force_rms_rel: Option<f64>,
     /// Its share of the contact phase in contact.
     pub contact_share: Option<f64>,
+    /// The strokes found in the contact phase (a strokes motion's count).
+    pub strokes: Option<usize>,
+    /// The reproduction's largest contact force and the eval's bound on it (twice the
+    /// demonstration's largest force plus 5 N) \[N\].
+    pub peak_force_n: Option<[f64; 2]>,
     /// How learning read the file's wrench: its frame, bias and sign.
     pub wrench: Option<String>,
     /// Whether the reproduction started from the file's joint angles.
@@ -68,7 +74,7 @@ fn label_boundaries(dir: &Path, file: &str) -> Option<Vec<usize>> {
     (!starts.is_empty()).then(|| starts.into_iter().skip(1).map(|s| s - 1).collect())
 }
 
-/// Evaluates every demonstration in `dir` with the slide template `skill`.
+/// Evaluates every demonstration in `dir` with the wipe template `skill`.
 pub fn evaluate(dir: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> Result<Vec<RealResult>, String> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|err| format!("cannot read `{}`: {err}", dir.display()))?
@@ -107,6 +113,8 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         reproduction: None,
         force_rms_rel: None,
         contact_share: None,
+        strokes: None,
+        peak_force_n: None,
         wrench: None,
         start_from_demo: false,
     };
@@ -149,6 +157,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
             })
             .collect();
     }
+    result.strokes = learned.motions.values().map(|m| m.strokes.len()).find(|&n| n > 0);
     result.force_n = learned.forces.values().find_map(|f| match f {
         LearnedForce::Constant { value_n, .. } => Some(*value_n),
         _ => None,
@@ -202,6 +211,8 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
             let metrics = measure(&log, &plan, false, &|_| z);
             result.force_rms_rel = metrics.force_rms_rel;
             result.contact_share = metrics.contact_share;
+            let demo_peak = demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max);
+            result.peak_force_n = Some([metrics.peak_force_n, 2.0 * demo_peak + 5.0]);
             result.reproduction = Some(format!("{:?}: {}", report.outcome, report.message));
         }
         Err(err) => result.reproduction = Some(error_chain(&err)),

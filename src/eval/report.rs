@@ -173,7 +173,7 @@ pub(super) fn write(
         }
     }
     if !real.is_empty() {
-        html.push_str("<h2>Real demonstrations</h2>\n<p>The slide template learned from each real demonstration; boundary errors are the distance from each of the authors' label boundaries to the nearest boundary found.</p>\n");
+        html.push_str("<h2>Real demonstrations</h2>\n<p>The wipe template (approach, strokes in contact, retreat) learned from each real demonstration; boundary errors are the distance from each of the authors' label boundaries to the nearest boundary found.</p>\n");
         let _ = writeln!(html, "<pre>{}</pre>", escape(&real_table(real)));
     }
     let _ = writeln!(
@@ -189,7 +189,7 @@ pub(super) fn write(
 /// The real-demonstration results as text.
 pub(super) fn real_table(results: &[RealResult]) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "real demonstrations (slide template):");
+    let _ = writeln!(out, "real demonstrations (wipe template):");
     for r in results {
         if let Some(why) = &r.skipped {
             let _ = writeln!(out, "  {:<14} {why}", r.file);
@@ -200,15 +200,18 @@ pub(super) fn real_table(results: &[RealResult]) -> String {
         let labels: Vec<String> = r.label_boundaries_s.iter().map(|e| format!("{e:.2}")).collect();
         let _ = writeln!(
             out,
-            "  {:<14} boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; reproduction: {} (force RMS {}%, contact {}%)",
+            "  {:<14} boundaries found [{}] s, labelled [{}] s, errors [{}] s; force {} N; {} strokes; reproduction: {} (force RMS {}%, contact {}%, peak {})",
             r.file,
             found.join(", "),
             labels.join(", "),
             errors.join(", "),
             number(r.force_n),
+            r.strokes.map_or("no".to_string(), |n| n.to_string()),
             r.reproduction.as_deref().unwrap_or("-"),
             percent(r.force_rms_rel),
-            percent(r.contact_share)
+            percent(r.contact_share),
+            r.peak_force_n
+                .map_or("-".to_string(), |[peak, bound]| format!("{peak:.1} N of {bound:.1} N"))
         );
         if let Some(wrench) = &r.wrench {
             let _ = writeln!(out, "  {:<14} {wrench}", "");

@@ -213,3 +213,67 @@ fn time_in_microseconds_is_an_error_naming_the_unit() {
     let text = learn(&micro, None).expect_err("microseconds").to_string();
     assert!(text.contains("wrong unit") && text.contains("microseconds"), "{text}");
 }
+
+/// The wipe's plan written out: three segments by the force magnitude, the contact learned as
+/// strokes (stdlib-skills/wipe.skill's learn block, without frames and forces).
+fn wiping_strokes() -> ir::Skill {
+    let mut skill = two_motions();
+    skill.name = "strokes".into();
+    skill.learn.segmentation = ir::Segmentation::Cluster {
+        linkage: ir::Linkage::Ward,
+        temporal: ir::Temporal::Connectivity { k: 10 },
+        cut: ir::Cut::Count(3),
+        min_length_s: 0.2,
+        features: ir::SegmentFeatures {
+            position: false,
+            force: false,
+            force_magnitude: true,
+        },
+    };
+    skill.learn.segments = 3;
+    skill.learn.motions = vec![ir::MotionDecl {
+        name: "strokes".into(),
+        segment: ir::SegmentIdx(1),
+        basis: 40,
+        strokes: Some(ir::Strokes { min_length_s: 0.15 }),
+        span: span(),
+    }];
+    skill
+}
+
+#[test]
+fn strokes_survive_noise_of_a_fifth_of_a_millimetre() {
+    let clean = demo(StdSkill::Wipe, 1);
+    let truth = generate(StdSkill::Wipe, StdSkill::Wipe.default_seed()).truth.turns_s;
+    let noisy = with_noise(&clean, 0.2e-3, 9);
+    let learned = learn_skill(&wiping_strokes(), &noisy, &[], &LearnOptions::default()).expect("learns");
+    let motion = &learned.motions["strokes"];
+    let times = &learned.quality.motions["strokes"].strokes_s;
+    assert_eq!(motion.strokes.len(), 4, "{times:?}");
+    for (stroke, turn) in times.iter().zip(&truth) {
+        assert!(
+            (stroke[1] - turn).abs() < 0.06,
+            "turn at {} s, truth {turn} s",
+            stroke[1]
+        );
+    }
+    // Each stroke's rollout against the noise-free path over its own samples.
+    for (stroke, [start_s, end_s]) in motion.strokes.iter().zip(times) {
+        let first = clean.t_s.partition_point(|&t| t < start_s - 1e-9);
+        let last = clean.t_s.partition_point(|&t| t <= end_s + 1e-9);
+        let (t, path) = (&clean.t_s[first..last], &clean.position_m[first..last]);
+        let mut rollout = stroke.position.rollout();
+        let mut sum = 0.0;
+        for k in 0..t.len() {
+            if k > 0 {
+                rollout.step(&stroke.position, t[k] - t[k - 1]);
+            }
+            sum += (Vector3::from_column_slice(rollout.position()) - path[k]).norm_squared();
+        }
+        let rms = (sum / t.len() as f64).sqrt();
+        assert!(
+            rms <= 1e-3,
+            "stroke {start_s:.2}-{end_s:.2} s: {rms} m RMS from the noise-free path"
+        );
+    }
+}

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use skill_runtime::demo::{read_csv, ReadOptions};
+use skill_runtime::demo::{frozen_force_share, read_csv, ReadOptions, FROZEN_FORCE_SHARE};
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode};
 use skill_runtime::skill::{learn_skill, LearnOptions, LearnedForce, LearnedFrame};
 
@@ -49,13 +49,6 @@ pub struct RealResult {
     pub wrench: Option<String>,
     /// Whether the reproduction started from the file's joint angles.
     pub start_from_demo: bool,
-}
-
-/// A demonstration whose force does not change between most consecutive samples: the sensor
-/// was not streaming.
-fn frozen(force: &[Vector3<f64>]) -> bool {
-    let unchanged = force.windows(2).filter(|w| (w[1] - w[0]).norm() < 1e-9).count();
-    force.len() > 2 && unchanged * 2 > force.len()
 }
 
 fn label_boundaries(dir: &Path, file: &str) -> Option<Vec<usize>> {
@@ -127,7 +120,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     };
     let demo = loaded.demo;
     result.samples = demo.len();
-    if frozen(&demo.force_n) {
+    if frozen_force_share(&demo.force_n) > FROZEN_FORCE_SHARE {
         result.skipped = Some("the force signal is frozen (the sensor did not stream): skipped".to_string());
         return result;
     }

@@ -142,7 +142,30 @@ pub enum DemoWarning {
         /// Estimated noise per axis \[m\].
         noise_m: f64,
     },
+    /// The force repeats exactly between most consecutive samples: the sensor was not
+    /// streaming, and nothing learned from the force (segments by force, contact frames, forces,
+    /// thresholds) describes the demonstration.
+    FrozenForce {
+        /// Source file.
+        file: String,
+        /// The share of consecutive samples with the same force, 0 to 1.
+        share: f64,
+    },
 }
+
+/// The share of consecutive samples whose force is exactly the same (0 for fewer than three
+/// samples). A streaming sensor's noise changes the last digits at every sample; a share above
+/// [`FROZEN_FORCE_SHARE`] means the stream repeated its last value.
+pub fn frozen_force_share(force: &[Vector3<f64>]) -> f64 {
+    if force.len() < 3 {
+        return 0.0;
+    }
+    let unchanged = force.windows(2).filter(|w| w[1] == w[0]).count();
+    unchanged as f64 / (force.len() - 1) as f64
+}
+
+/// The share of repeated force samples above which a force signal counts as frozen.
+pub const FROZEN_FORCE_SHARE: f64 = 0.5;
 
 impl std::fmt::Display for DemoWarning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -165,6 +188,11 @@ impl std::fmt::Display for DemoWarning {
                 f,
                 "the positions in `{file}` carry {:.3} mm of noise and are not smoothed: learned motions will be rough; set `lowpass` (e.g. --lowpass 20) or record faster",
                 noise_m * 1e3
+            ),
+            DemoWarning::FrozenForce { file, share } => write!(
+                f,
+                "the force in `{file}` repeats exactly between {:.0} % of consecutive samples: the force sensor was not streaming (or streamed far slower than the pose was logged), so segments, frames and forces learned from the force may not describe the demonstration; check the recording, or learn only motions (`segments = none`)",
+                share * 100.0
             ),
         }
     }

@@ -8,7 +8,7 @@ use super::filter::{low_pass_motion, FilterOrder};
 use super::noise::position_noise_m;
 use super::timing::{check_timing, median_step_s};
 use super::wrench::{prepare_wrench, WrenchOptions, WrenchReport};
-use super::{preprocess, Demo, DemoError, DemoWarning, PreprocessConfig};
+use super::{frozen_force_share, preprocess, Demo, DemoError, DemoWarning, PreprocessConfig, FROZEN_FORCE_SHARE};
 
 /// The top of the band hand-guided motion occupies \[Hz\]: voluntary arm motion stays below
 /// about 5 Hz, physiological tremor sits at 8-12 Hz with amplitudes of a tenth of a millimetre.
@@ -97,6 +97,13 @@ pub struct Prepared {
 /// is none, its motion at [`default_motion_cutoff_hz`]. A cut-off of 0 switches smoothing off.
 pub fn prepare(demo: &Demo, config: &PreprocessConfig, wrench: &WrenchOptions) -> Result<Prepared, DemoError> {
     let mut warnings = check_timing(demo)?;
+    let share = frozen_force_share(&demo.force_n);
+    if share > FROZEN_FORCE_SHARE {
+        warnings.push(DemoWarning::FrozenForce {
+            file: demo.source.clone(),
+            share,
+        });
+    }
     let (settled, wrench) = prepare_wrench(demo, wrench);
     let demo = &settled;
     let position_noise_m = position_noise_m(&demo.t_s, &demo.position_m);
@@ -146,5 +153,33 @@ mod tests {
         assert_eq!(default_motion_cutoff_hz(100.0), Some(20.0));
         assert_eq!(default_motion_cutoff_hz(74.0), Some(0.2 * 74.0));
         assert_eq!(default_motion_cutoff_hz(40.0), None);
+    }
+
+    #[test]
+    fn a_force_that_stops_streaming_is_reported_as_frozen() {
+        use crate::demogen::{generate, StdSkill};
+        let generated = generate(StdSkill::Slide, 13);
+        let mut demo = Demo {
+            source: "slide.csv".into(),
+            t_s: generated.samples.iter().map(|s| s.t_s).collect(),
+            position_m: generated.samples.iter().map(|s| s.position_m).collect(),
+            orientation: generated.samples.iter().map(|s| s.orientation).collect(),
+            force_n: generated.samples.iter().map(|s| s.force_n).collect(),
+            torque_nm: generated.samples.iter().map(|s| s.torque_nm).collect(),
+        };
+        let frozen = |demo: &Demo| {
+            let prepared = prepare(demo, &PreprocessConfig::default(), &WrenchOptions::default()).expect("prepares");
+            prepared
+                .warnings
+                .iter()
+                .any(|w| matches!(w, DemoWarning::FrozenForce { .. }))
+        };
+        assert!(!frozen(&demo), "a streaming sensor's noise changes every sample");
+        // The stream repeats each value ten times (a sensor at a tenth of the pose's rate): 90 %.
+        for k in 0..demo.force_n.len() {
+            demo.force_n[k] = demo.force_n[k - k % 10];
+        }
+        assert!((frozen_force_share(&demo.force_n) - 0.9).abs() < 0.01);
+        assert!(frozen(&demo));
     }
 }

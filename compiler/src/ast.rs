@@ -316,6 +316,25 @@ pub enum GuardKind {
         /// The right-hand side: a threshold or force name, or a literal.
         rhs: Expr,
     },
+    /// `moved(FRAME.AXIS) OP VALUE` (the tool point's displacement along the axis since the
+    /// state was entered) or, without an axis, `moved OP VALUE` (the distance).
+    Moved {
+        /// The axis, if written.
+        axis: Option<AxisRef>,
+        /// The comparison.
+        op: CmpOp,
+        /// The right-hand side: a length, or an angle for a rotation axis.
+        rhs: Expr,
+    },
+    /// `force_magnitude OP VALUE` or `moment_magnitude OP VALUE`.
+    Magnitude {
+        /// `true` for `moment_magnitude`.
+        moment: bool,
+        /// The comparison.
+        op: CmpOp,
+        /// The right-hand side: a threshold or force name, or a literal.
+        rhs: Expr,
+    },
     /// `timeout 5 s` or `dwell 200 ms`.
     Timed {
         /// `true` for `timeout`.

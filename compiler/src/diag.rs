@@ -151,6 +151,13 @@ codes! {
     /// `approach within 5 cm at 10 mm/s` in a state no force guard leaves: it slows down for
     /// a contact nothing waits for.
     ApproachWithoutForceGuard => "skill::lint::approach_without_force_guard", Warning;
+    /// `extend along base.z`: a search along an axis the checker knows points up (the base's z,
+    /// or a literal frame's axis more than 30° above the horizontal) moves the goal away from a
+    /// surface below.
+    ExtendUpwards => "skill::lint::extend_upwards", Warning;
+    /// `frame table = fixed(origin: [0 m, 0 m, 5 cm])`: a literal frame whose origin lies within
+    /// 10 cm of the robot base (origins are in the base frame, metres), or that gives none.
+    FrameAtBase => "skill::lint::frame_at_base", Warning;
     /// `lift off 2 cm at 10 mm/s` in a state that never lifts off: one that force-controls an
     /// axis, or approaches a contact (`approach`, or a force guard).
     LiftOffIgnored => "skill::lint::lift_off_ignored", Warning;

@@ -383,6 +383,22 @@ pub fn guard(g: &Guard) -> String {
                 expr(rhs)
             )
         }
+        GuardKind::Moved { axis, op, rhs } => match axis {
+            Some(axis) => format!(
+                "moved({}.{}) {} {}",
+                axis.frame.name,
+                axis.axis.name,
+                op.as_str(),
+                expr(rhs)
+            ),
+            None => format!("moved {} {}", op.as_str(), expr(rhs)),
+        },
+        GuardKind::Magnitude { moment, op, rhs } => format!(
+            "{} {} {}",
+            if *moment { "moment_magnitude" } else { "force_magnitude" },
+            op.as_str(),
+            expr(rhs)
+        ),
         GuardKind::Timed { timeout, duration } => {
             format!("{} {}", if *timeout { "timeout" } else { "dwell" }, expr(duration))
         }

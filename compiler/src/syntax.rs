@@ -111,16 +111,44 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
         .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
         .collect();
     if label.contains("a name") && KEYWORDS.contains(&word.as_str()) {
+        let (what, example) = named_here(src_text, span.start, &word);
         return Diag::new(
             Code::Unexpected,
             file,
             Span::new(span.start, span.start + word.len()),
-            format!("`{word}` is a keyword and cannot be used as a name"),
+            format!("`{word}` is a keyword and cannot name {what}"),
             "keyword used as a name",
         )
-        .help(format!("rename it, e.g. `{word}_frame`"));
+        .help(format!("rename it, e.g. `{example}`"));
     }
     Diag::new(Code::Unexpected, file, span, message, label)
+}
+
+/// What the name at `at` would name, judged by the word before it (`state up`, `motion up =`,
+/// `-> up`), and a legal name for it built from `word`.
+fn named_here(src_text: &str, at: usize, word: &str) -> (&'static str, String) {
+    let before = src_text.get(..at).unwrap_or("").trim_end();
+    let previous: String = before
+        .chars()
+        .rev()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == '>' || *c == '-')
+        .collect::<Vec<char>>()
+        .into_iter()
+        .rev()
+        .collect();
+    let (what, suffix) = match previous.as_str() {
+        "state" | "->" | "then" => ("a state", "state"),
+        "terminal" => ("a terminal state", "done"),
+        "frame" => ("a frame", "frame"),
+        "motion" | "move" => ("a motion", "motion"),
+        "force" | "apply" => ("a force", "force"),
+        "threshold" => ("a threshold", "threshold"),
+        "skill" => ("a skill", "skill"),
+        "task" => ("a task", "task"),
+        "step" | "fallback" => ("a step", "step"),
+        _ => ("anything", "name"),
+    };
+    (what, format!("{word}_{suffix}"))
 }
 
 /// Words the grammar reserves (they may not be names); keep in step with `keyword` in skill.pest.
@@ -206,6 +234,7 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         }
         Rule::for_kw => "`for`",
         Rule::force_cmp | Rule::timed | Rule::timed_kw | Rule::reached => "a guard",
+        Rule::moved_cmp | Rule::moved_kw | Rule::magnitude_cmp | Rule::magnitude_kw => "a guard",
         Rule::cmp_op => "a comparison (`>=`, `>`, `<=`, `<`)",
         Rule::task_entry | Rule::step | Rule::fallback => "`step` or `fallback`",
         Rule::on_failure => "`on failure`",
@@ -600,15 +629,33 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
         Rule::force_cmp => {
             let mut inner = pair.into_inner();
             let axis = axis_ref(inner.next().expect("grammar: force() has an axis"));
-            let op = match inner.next().expect("grammar: comparison operator").as_str() {
-                ">=" => CmpOp::Ge,
-                ">" => CmpOp::Gt,
-                "<=" => CmpOp::Le,
-                _ => CmpOp::Lt,
-            };
+            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
             let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
             Guard {
                 kind: GuardKind::Force { axis, op, rhs },
+                span,
+            }
+        }
+        Rule::moved_cmp => {
+            let mut inner = pair.into_inner().skip(1).peekable();
+            let axis = match inner.peek().map(Pair::as_rule) {
+                Some(Rule::axis_ref) => Some(axis_ref(inner.next().expect("peeked"))),
+                _ => None,
+            };
+            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
+            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            Guard {
+                kind: GuardKind::Moved { axis, op, rhs },
+                span,
+            }
+        }
+        Rule::magnitude_cmp => {
+            let mut inner = pair.into_inner();
+            let moment = inner.next().expect("grammar: magnitude keyword").as_str() == "moment_magnitude";
+            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
+            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            Guard {
+                kind: GuardKind::Magnitude { moment, op, rhs },
                 span,
             }
         }
@@ -640,6 +687,15 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
             }
         }
         rule => unreachable!("grammar: unexpected {rule:?} in guard"),
+    }
+}
+
+fn cmp_op(pair: Pair<'_, Rule>) -> CmpOp {
+    match pair.as_str() {
+        ">=" => CmpOp::Ge,
+        ">" => CmpOp::Gt,
+        "<=" => CmpOp::Le,
+        _ => CmpOp::Lt,
     }
 }
 
@@ -784,4 +840,36 @@ fn expr(pair: Pair<'_, Rule>) -> Expr {
         rule => unreachable!("grammar: unexpected {rule:?} as value"),
     };
     Expr { kind, span }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The message and help of the one diagnostic of `text`.
+    fn keyword_diag(text: &str) -> (String, String) {
+        let (_, diags) = parse(&SourceFile::new("t.skill", text), 0);
+        let diag = diags.first().expect("a diagnostic");
+        (diag.message.clone(), diag.help.clone().unwrap_or_default())
+    }
+
+    #[test]
+    fn a_keyword_as_a_name_is_explained_for_what_it_names() {
+        let (message, help) = keyword_diag("skill s { state up { on timeout 1 s -> done } }");
+        assert_eq!(message, "`up` is a keyword and cannot name a state");
+        assert_eq!(help, "rename it, e.g. `up_state`");
+        let (message, help) = keyword_diag("skill s { learn { motion up = dmp(segment 1) } }");
+        assert_eq!(message, "`up` is a keyword and cannot name a motion");
+        assert_eq!(help, "rename it, e.g. `up_motion`");
+        let (message, help) = keyword_diag("skill s { learn { frame at = fixed() } }");
+        assert_eq!(message, "`at` is a keyword and cannot name a frame");
+        assert_eq!(help, "rename it, e.g. `at_frame`");
+        let (message, _) = keyword_diag("skill s { learn { threshold to = 2 N } }");
+        assert_eq!(message, "`to` is a keyword and cannot name a threshold");
+        let (message, help) = keyword_diag("skill s { state a { on timeout 1 s -> up } }");
+        assert_eq!(message, "`up` is a keyword and cannot name a state");
+        assert_eq!(help, "rename it, e.g. `up_state`");
+        let (message, _) = keyword_diag("skill s { terminal from: success }");
+        assert_eq!(message, "`from` is a keyword and cannot name a terminal state");
+    }
 }

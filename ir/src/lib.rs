@@ -26,7 +26,9 @@ use serde::{Deserialize, Serialize};
 ///   reads as a version 2 file without them).
 /// - 3: a motion may be learned as [`Strokes`] and an active state may [`ActiveState::repeat`]
 ///   its motion (both optional: a version 2 file reads as a version 3 file without them).
-pub const IR_VERSION: u32 = 3;
+/// - 4: guards may be [`Guard::Moved`], [`Guard::MovedDistance`], [`Guard::ForceMagnitude`] and
+///   [`Guard::MomentMagnitude`] (new variants only: a version 3 file reads as a version 4 file).
+pub const IR_VERSION: u32 = 4;
 
 /// A compiled `.skill` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -858,6 +860,42 @@ pub enum Guard {
         /// The comparison.
         op: Comparison,
         /// The right-hand side.
+        rhs: Threshold,
+    },
+    /// The tool point's displacement since the state was entered, along a frame axis (the
+    /// axis's direction now), compared with `value`: metres along a translation axis; radians
+    /// about a rotation axis (the tool's rotation since entry, as a rotation vector in the base
+    /// frame, projected onto the axis).
+    Moved {
+        /// The axis measured.
+        along: FrameAxis,
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side \[m or rad\].
+        value: f64,
+    },
+    /// The distance of the tool point from where it was when the state was entered, in any
+    /// direction, compared with `value_m`.
+    MovedDistance {
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side \[m\].
+        value_m: f64,
+    },
+    /// The length of the applied force \[N\] compared with a threshold (scaled by a task
+    /// step's `force_scale` as [`Guard::Force`]'s is).
+    ForceMagnitude {
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side \[N\].
+        rhs: Threshold,
+    },
+    /// The length of the applied moment about the tool point \[Nm\] compared with a threshold
+    /// (scaled by a task step's `force_scale`).
+    MomentMagnitude {
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side \[Nm\].
         rhs: Threshold,
     },
     /// Every DMP the state runs (motion and force profile) has finished, including any extension.

@@ -53,16 +53,60 @@ impl Checker<'_> {
                         .quantity(rhs, dim, "the threshold")
                         .map(|value| ir::Threshold::Literal { value }),
                 };
-                let op = match op {
-                    ast::CmpOp::Ge => ir::Comparison::Ge,
-                    ast::CmpOp::Gt => ir::Comparison::Gt,
-                    ast::CmpOp::Le => ir::Comparison::Le,
-                    ast::CmpOp::Lt => ir::Comparison::Lt,
-                };
                 Some(ir::Guard::Force {
                     along: along?,
-                    op,
+                    op: comparison(*op),
                     rhs: rhs?,
+                })
+            }
+            GuardKind::Moved { axis, op, rhs } => {
+                let along = axis.as_ref().map(|axis| self.frame_axis(axis, false, scope));
+                let (dim, what) = match along {
+                    Some(Some(along)) if along.axis.is_rotation() => (Dim::Angle, "`moved` about a rotation axis"),
+                    _ => (Dim::Length, "`moved`"),
+                };
+                let value = match &rhs.kind {
+                    ExprKind::Name(name) => {
+                        let example = if dim == Dim::Angle { "5 deg" } else { "6 mm" };
+                        let kind = dim.describe();
+                        let diag = self
+                            .diag(
+                                Code::UnitMismatch,
+                                name.span,
+                                format!("`moved` compares with {kind} written out, not a name"),
+                                "a name",
+                            )
+                            .help(format!(
+                                "learned thresholds and forces are forces; write {kind} with its unit, like `{example}`"
+                            ));
+                        self.report(diag);
+                        None
+                    }
+                    _ => self.quantity(rhs, dim, what),
+                };
+                let op = comparison(*op);
+                match along {
+                    Some(along) => Some(ir::Guard::Moved {
+                        along: along?,
+                        op,
+                        value: value?,
+                    }),
+                    None => Some(ir::Guard::MovedDistance { op, value_m: value? }),
+                }
+            }
+            GuardKind::Magnitude { moment, op, rhs } => {
+                let dim = if *moment { Dim::Torque } else { Dim::Force };
+                let rhs = match &rhs.kind {
+                    ExprKind::Name(name) => self.threshold_ref(name, dim, scope),
+                    _ => self
+                        .quantity(rhs, dim, "the threshold")
+                        .map(|value| ir::Threshold::Literal { value }),
+                };
+                let op = comparison(*op);
+                Some(if *moment {
+                    ir::Guard::MomentMagnitude { op, rhs: rhs? }
+                } else {
+                    ir::Guard::ForceMagnitude { op, rhs: rhs? }
                 })
             }
             GuardKind::Timed { timeout, duration } => {
@@ -97,6 +141,10 @@ impl Checker<'_> {
                     "timeout" | "dwell" => format!("`{}` needs a duration: `{} 5 s`", name.name, name.name),
                     "force_reached" => "write `force_reached within 1 N`".to_string(),
                     "contact" => "contact is a force guard: `force(contact.z) >= touch`".to_string(),
+                    "moved" => "compare it: `moved >= 5 cm`, or along an axis: `moved(contact.z) >= 6 mm`".to_string(),
+                    "force_magnitude" | "moment_magnitude" => {
+                        format!("compare it: `{} >= {}`", name.name, if name.name == "force_magnitude" { "20 N" } else { "2 Nm" })
+                    }
                     other => suggest(
                         other,
                         NAMED_GUARDS
@@ -105,7 +153,7 @@ impl Checker<'_> {
                             .chain(["timeout", "dwell", "force_reached"]),
                     )
                     .unwrap_or_else(|| {
-                        "guards are `motion_done`, `force(F.z) >= X`, `force_reached within X`, `timeout T`, `dwell T`"
+                        "guards are `motion_done`, `force(F.z) >= X`, `force_magnitude >= X`, `moment_magnitude >= X`, `moved(F.z) >= D`, `moved >= D`, `force_reached within X`, `timeout T`, `dwell T`"
                             .to_string()
                     }),
                 };
@@ -236,6 +284,11 @@ impl Checker<'_> {
             }
             let mut shadowed = false;
             for (earlier, earlier_guard, _) in &transitions[..index] {
+                // An earlier `extend` keeps the state: once its search runs, later transitions
+                // are evaluated whenever its guard holds.
+                if matches!(earlier.action, ir::TransitionAction::Extend { .. }) {
+                    continue;
+                }
                 if earlier.guard == transition.guard {
                     let diag = self
                         .diag(
@@ -285,6 +338,10 @@ impl Checker<'_> {
             && transitions
                 .iter()
                 .all(|(transition, _, _)| only_force_atoms(&transition.guard));
+        let all_force_or_movement = !transitions.is_empty()
+            && transitions
+                .iter()
+                .all(|(transition, _, _)| only_force_or_movement_atoms(&transition.guard));
         if all_force_only {
             let diag = self
                 .diag(
@@ -295,7 +352,29 @@ impl Checker<'_> {
                 )
                 .help("add `on timeout 10 s -> STATE` or `on motion_done -> STATE`");
             self.report(diag);
+        } else if all_force_or_movement {
+            let diag = self
+                .diag(
+                    Code::ContactWaitWithoutTimeout,
+                    state.name.span,
+                    format!(
+                        "state `{}` waits for a force or a movement with no timeout",
+                        state.name.name
+                    ),
+                    "may wait forever if the contact never comes or the tool cannot move (a jammed button)",
+                )
+                .help("add `on timeout 10 s -> STATE` or `on motion_done -> STATE`");
+            self.report(diag);
         }
+    }
+}
+
+fn comparison(op: ast::CmpOp) -> ir::Comparison {
+    match op {
+        ast::CmpOp::Ge => ir::Comparison::Ge,
+        ast::CmpOp::Gt => ir::Comparison::Gt,
+        ast::CmpOp::Le => ir::Comparison::Le,
+        ast::CmpOp::Lt => ir::Comparison::Lt,
     }
 }
 
@@ -310,6 +389,8 @@ fn only_time(guard: &ast::Guard) -> bool {
         GuardKind::Not(_)
         | GuardKind::Held { .. }
         | GuardKind::Force { .. }
+        | GuardKind::Moved { .. }
+        | GuardKind::Magnitude { .. }
         | GuardKind::ForceReached(_)
         | GuardKind::Named(_) => false,
     }
@@ -402,30 +483,55 @@ fn atom_implies(a: &ir::Guard, b: &ir::Guard) -> bool {
                 duration_s: db,
             },
         ) => da >= db && implies(ga, gb),
-        (
-            Force {
-                along: la,
-                op: oa,
-                rhs: ir::Threshold::Literal { value: va },
-            },
-            Force {
-                along: lb,
-                op: ob,
-                rhs: ir::Threshold::Literal { value: vb },
-            },
-        ) if la == lb => {
-            use ir::Comparison::*;
-            match (oa, ob) {
-                (Ge | Gt, Ge) => va >= vb,
-                (Gt, Gt) => va >= vb,
-                (Ge, Gt) => va > vb,
-                (Le | Lt, Le) => va <= vb,
-                (Lt, Lt) => va <= vb,
-                (Le, Lt) => va < vb,
-                _ => false,
+        (a, b) => match (literal_bound(a), literal_bound(b)) {
+            (Some((qa, oa, va)), Some((qb, ob, vb))) if qa == qb => {
+                use ir::Comparison::*;
+                match (oa, ob) {
+                    (Ge | Gt, Ge) => va >= vb,
+                    (Gt, Gt) => va >= vb,
+                    (Ge, Gt) => va > vb,
+                    (Le | Lt, Le) => va <= vb,
+                    (Lt, Lt) => va <= vb,
+                    (Le, Lt) => va < vb,
+                    _ => false,
+                }
             }
-        }
-        _ => false,
+            _ => false,
+        },
+    }
+}
+
+/// What a comparison with a literal measures (two atoms with the same one compare the same
+/// number).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Measured {
+    Force(ir::FrameAxis),
+    Moved(ir::FrameAxis),
+    Distance,
+    ForceMagnitude,
+    MomentMagnitude,
+}
+
+/// A comparison of a measured quantity with a literal: what, how, and the literal.
+fn literal_bound(guard: &ir::Guard) -> Option<(Measured, ir::Comparison, f64)> {
+    use ir::Threshold::Literal;
+    match *guard {
+        ir::Guard::Force {
+            along,
+            op,
+            rhs: Literal { value },
+        } => Some((Measured::Force(along), op, value)),
+        ir::Guard::Moved { along, op, value } => Some((Measured::Moved(along), op, value)),
+        ir::Guard::MovedDistance { op, value_m } => Some((Measured::Distance, op, value_m)),
+        ir::Guard::ForceMagnitude {
+            op,
+            rhs: Literal { value },
+        } => Some((Measured::ForceMagnitude, op, value)),
+        ir::Guard::MomentMagnitude {
+            op,
+            rhs: Literal { value },
+        } => Some((Measured::MomentMagnitude, op, value)),
+        _ => None,
     }
 }
 
@@ -453,20 +559,8 @@ fn unsatisfiable(guard: &ir::Guard) -> bool {
                     return true;
                 }
             }
-            if let (
-                ir::Guard::Force {
-                    along: la,
-                    op: oa,
-                    rhs: ir::Threshold::Literal { value: va },
-                },
-                ir::Guard::Force {
-                    along: lb,
-                    op: ob,
-                    rhs: ir::Threshold::Literal { value: vb },
-                },
-            ) = (a, b)
-            {
-                if la == lb {
+            if let (Some((qa, oa, va)), Some((qb, ob, vb))) = (literal_bound(a), literal_bound(b)) {
+                if qa == qb {
                     use ir::Comparison::*;
                     let lower_upper =
                         |lo_op: ir::Comparison, lo: f64, hi_op: ir::Comparison, hi: f64| match (lo_op, hi_op) {
@@ -474,10 +568,10 @@ fn unsatisfiable(guard: &ir::Guard) -> bool {
                             (Ge | Gt, Le | Lt) => lo >= hi,
                             _ => false,
                         };
-                    if matches!(oa, Ge | Gt) && matches!(ob, Le | Lt) && lower_upper(*oa, *va, *ob, *vb) {
+                    if matches!(oa, Ge | Gt) && matches!(ob, Le | Lt) && lower_upper(oa, va, ob, vb) {
                         return true;
                     }
-                    if matches!(ob, Ge | Gt) && matches!(oa, Le | Lt) && lower_upper(*ob, *vb, *oa, *va) {
+                    if matches!(ob, Ge | Gt) && matches!(oa, Le | Lt) && lower_upper(ob, vb, oa, va) {
                         return true;
                     }
                 }
@@ -503,10 +597,35 @@ fn impossible_atom(guard: &ir::Guard, runs_dmp: bool, has_force_axes: bool) -> O
                     "force-control an axis, or compare the force: `force(FRAME.z) >= X`",
                 ))
             }
+            ir::Guard::ForceMagnitude {
+                op,
+                rhs: ir::Threshold::Literal { value },
+            }
+            | ir::Guard::MomentMagnitude {
+                op,
+                rhs: ir::Threshold::Literal { value },
+            }
+            | ir::Guard::MovedDistance { op, value_m: value }
+                if below_zero(*op, *value) =>
+            {
+                return Some((
+                    "a magnitude below zero",
+                    "a force's, moment's or movement's length is never negative; compare with a positive value",
+                ))
+            }
             _ => {}
         }
     }
     None
+}
+
+/// Whether `x OP value` asks a length `x` (zero or more) to be below zero.
+fn below_zero(op: ir::Comparison, value: f64) -> bool {
+    match op {
+        ir::Comparison::Lt => value <= 0.0,
+        ir::Comparison::Le => value < 0.0,
+        ir::Comparison::Ge | ir::Comparison::Gt => false,
+    }
 }
 
 /// Whether every atom of a guard is a force comparison (a wait that needs contact).
@@ -515,9 +634,23 @@ fn only_force_atoms(guard: &ir::Guard) -> bool {
         ir::Guard::And { all } => all.iter().all(only_force_atoms),
         ir::Guard::Or { any } => any.iter().all(only_force_atoms),
         ir::Guard::Not { guard } | ir::Guard::Held { guard, .. } => only_force_atoms(guard),
-        ir::Guard::Force { .. } => true,
+        ir::Guard::Force { .. } | ir::Guard::ForceMagnitude { .. } | ir::Guard::MomentMagnitude { .. } => true,
         _ => false,
     }
+}
+
+/// Whether every atom of a guard compares a force or a movement (a wait that needs the world to
+/// give way: contact, or a button that travels), and at least one a movement.
+fn only_force_or_movement_atoms(guard: &ir::Guard) -> bool {
+    fn all(guard: &ir::Guard) -> bool {
+        match guard {
+            ir::Guard::And { all: parts } | ir::Guard::Or { any: parts } => parts.iter().all(all),
+            ir::Guard::Not { guard } | ir::Guard::Held { guard, .. } => all(guard),
+            ir::Guard::Moved { .. } | ir::Guard::MovedDistance { .. } => true,
+            other => only_force_atoms(other),
+        }
+    }
+    all(guard)
 }
 
 #[cfg(test)]
@@ -603,5 +736,77 @@ mod tests {
         assert!(impossible_atom(&held(touch.clone(), 0.1), false, true).is_some());
         assert!(impossible_atom(&not_held, false, true).is_none());
         assert!(impossible_atom(&held(ir::Guard::ForceReached { tolerance_n: 1.0 }, 0.1), true, false).is_some());
+    }
+
+    fn moved(axis: ir::Axis, op: ir::Comparison, value: f64) -> ir::Guard {
+        ir::Guard::Moved {
+            along: ir::FrameAxis {
+                frame: ir::FrameRef::Base,
+                axis,
+            },
+            op,
+            value,
+        }
+    }
+
+    #[test]
+    fn displacement_and_magnitude_bounds_imply_and_contradict_like_force_bounds() {
+        use ir::Comparison::{Ge, Gt, Le, Lt};
+        let far = moved(ir::Axis::Z, Ge, 0.008);
+        let near = moved(ir::Axis::Z, Ge, 0.006);
+        assert!(implies(&far, &near));
+        assert!(!implies(&near, &far));
+        assert!(!implies(&moved(ir::Axis::X, Ge, 0.008), &near), "another axis");
+        let both = |a: ir::Guard, b: ir::Guard| ir::Guard::And { all: vec![a, b] };
+        assert!(unsatisfiable(&both(far.clone(), moved(ir::Axis::Z, Lt, 0.008))));
+        assert!(!unsatisfiable(&both(near.clone(), moved(ir::Axis::Z, Le, 0.008))));
+        let distance = |op, value_m| ir::Guard::MovedDistance { op, value_m };
+        assert!(implies(&distance(Gt, 0.1), &distance(Ge, 0.05)));
+        assert!(
+            !implies(&distance(Gt, 0.1), &near),
+            "a distance says nothing about an axis"
+        );
+        let force = |op, value| ir::Guard::ForceMagnitude {
+            op,
+            rhs: ir::Threshold::Literal { value },
+        };
+        let moment = |op, value| ir::Guard::MomentMagnitude {
+            op,
+            rhs: ir::Threshold::Literal { value },
+        };
+        assert!(implies(&force(Ge, 20.0), &force(Ge, 10.0)));
+        assert!(!implies(&force(Ge, 20.0), &moment(Ge, 10.0)), "a force is not a moment");
+        assert!(unsatisfiable(&both(force(Ge, 20.0), force(Le, 10.0))));
+        // Lengths are never negative.
+        assert!(impossible_atom(&force(Lt, 0.0), true, true).is_some());
+        assert!(impossible_atom(&distance(Le, -0.01), true, true).is_some());
+        assert!(
+            impossible_atom(&distance(Le, 0.0), true, true).is_none(),
+            "holds at entry"
+        );
+        assert!(
+            impossible_atom(&moved(ir::Axis::Z, Lt, 0.0), true, true).is_none(),
+            "a signed component"
+        );
+    }
+
+    #[test]
+    fn a_later_guard_is_not_shadowed_by_an_earlier_extend_which_keeps_the_state() {
+        let text = "skill s {
+    learn {
+        segments = max_force
+        frame contact = force_aligned(at: end(segment 1))
+        motion approach = dmp(segment 1)
+    }
+    state search {
+        move approach from current
+        on force(contact.z) >= 2 N -> done
+        on dwell 0 s -> extend along contact.z at 10 mm/s, up to 5 cm, then done
+        on timeout 10 s -> done
+    }
+    terminal done: success
+}";
+        let compilation = crate::compile_str("t.skill", text);
+        assert!(compilation.diags.is_empty(), "{:?}", compilation.diags);
     }
 }

@@ -135,11 +135,18 @@ impl Checker<'_> {
             let span = self.ir_span(name.span);
             match decl.kind {
                 LearnKind::Frame => match self.frame_source(&decl.value, scope) {
-                    Some(source) => frames.push(ir::FrameDecl {
-                        name: name.name.clone(),
-                        source,
-                        span,
-                    }),
+                    Some(source) => {
+                        if let ir::FrameSource::Fixed { quaternion_wxyz, .. } = source {
+                            if let Some(sym) = scope.symbols.get(&name.name) {
+                                scope.fixed_frames.insert(sym.id, quaternion_wxyz);
+                            }
+                        }
+                        frames.push(ir::FrameDecl {
+                            name: name.name.clone(),
+                            source,
+                            span,
+                        })
+                    }
                     None => ok = false,
                 },
                 LearnKind::Motion => match self.motion(&decl.value, scope) {

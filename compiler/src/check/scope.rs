@@ -49,6 +49,8 @@ pub(super) struct SkillScope {
     pub(super) segments_span: Option<Span>,
     pub(super) reported_unknown_count: bool,
     pub(super) force_sources: Vec<ir::ForceSource>,
+    /// The orientation (`[w, x, y, z]`, base frame) of each literal `fixed(...)` frame, by id.
+    pub(super) fixed_frames: HashMap<u32, [f64; 4]>,
 }
 
 impl Checker<'_> {

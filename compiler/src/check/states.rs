@@ -31,8 +31,11 @@ fn mentions_force(guard: &ast::Guard) -> bool {
     match &guard.kind {
         ast::GuardKind::Or(parts) | ast::GuardKind::And(parts) => parts.iter().any(mentions_force),
         ast::GuardKind::Not(inner) | ast::GuardKind::Held { guard: inner, .. } => mentions_force(inner),
-        ast::GuardKind::Force { .. } => true,
-        ast::GuardKind::Timed { .. } | ast::GuardKind::ForceReached(_) | ast::GuardKind::Named(_) => false,
+        ast::GuardKind::Force { .. } | ast::GuardKind::Magnitude { .. } => true,
+        ast::GuardKind::Moved { .. }
+        | ast::GuardKind::Timed { .. }
+        | ast::GuardKind::ForceReached(_)
+        | ast::GuardKind::Named(_) => false,
     }
 }
 
@@ -725,6 +728,11 @@ impl Checker<'_> {
                 axis, speed, max, then, ..
             } => {
                 let along = self.frame_axis(axis, true, scope);
+                if let Some(direction) =
+                    along.and_then(|along| super::frames::known_direction(along, &scope.fixed_frames))
+                {
+                    self.extend_upwards(axis, direction);
+                }
                 let speed_value = self.quantity(speed, Dim::Speed, "the extension speed");
                 let speed_mps = self.positive(speed_value, speed.span, "the extension speed");
                 let max_value = self.quantity(max, Dim::Length, "the extension bound");
@@ -738,6 +746,33 @@ impl Checker<'_> {
                 })
             }
         }
+    }
+
+    /// `extend along base.z`: the search moves the goal along the axis's positive direction, and
+    /// this one points up (more than 30° above the horizontal), away from any table or part below.
+    fn extend_upwards(&mut self, axis: &ast::AxisRef, direction: [f64; 3]) {
+        if direction[2] <= 0.5 {
+            return;
+        }
+        let frame = axis.frame.name.as_str();
+        let why = if frame == "base" {
+            "the base's z points up".to_string()
+        } else {
+            format!("`{frame}.{}` points up in the base frame", axis.axis.name)
+        };
+        let diag = self
+            .diag(
+                Code::ExtendUpwards,
+                axis.span,
+                format!("`extend along {frame}.{}` searches upwards", axis.axis.name),
+                format!("{why}: the goal moves away from a surface below"),
+            )
+            .help(
+                "a search moves into the surface: extend along a contact frame's z, which points into it \
+                 (`frame contact = force_aligned(at: end(segment 1))`, then `extend along contact.z`), \
+                 or along a literal frame turned over (`fixed(origin: [...], rpy: [180 deg, 0 deg, 0 deg])`)",
+            );
+        self.report(diag);
     }
 
     fn state_ref(

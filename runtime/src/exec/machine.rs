@@ -62,6 +62,9 @@ pub(super) struct Machine<'b, 'a> {
     state: ir::StateId,
     entered_s: f64,
     held: Isometry3<f64>,
+    /// The tool point's pose when the current state was entered (base frame): `moved` guards
+    /// measure from it.
+    entry_tool: Isometry3<f64>,
     motion: Option<RunningMotion>,
     force_profile: Option<DmpRollout>,
     extension: Option<Extension>,
@@ -235,7 +238,7 @@ fn mentions_force(guard: &ir::Guard) -> bool {
         ir::Guard::And { all } => all.iter().any(mentions_force),
         ir::Guard::Or { any } => any.iter().any(mentions_force),
         ir::Guard::Not { guard } | ir::Guard::Held { guard, .. } => mentions_force(guard),
-        ir::Guard::Force { .. } => true,
+        ir::Guard::Force { .. } | ir::Guard::ForceMagnitude { .. } | ir::Guard::MomentMagnitude { .. } => true,
         _ => false,
     }
 }
@@ -279,6 +282,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             state: skill.initial,
             entered_s: rig.time_s(),
             held: rig.flange(),
+            entry_tool: rig.tool(),
             motion: None,
             force_profile: None,
             extension: None,
@@ -332,6 +336,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.hold_timers.clear();
         let flange = rig.flange();
         self.held = flange;
+        self.entry_tool = rig.tool();
         let Some(active) = self.active() else { return Ok(()) };
         self.guarded = guarded_approach(self.skill(), active);
         let applied = rig.controller.state().applied.fixed_rows::<3>(0).into_owned();
@@ -536,6 +541,28 @@ impl<'b, 'a> Machine<'b, 'a> {
                     sensed.applied.fixed_rows::<3>(0).dot(&axis)
                 };
                 op.holds(value, self.scaled_threshold(*rhs))
+            }
+            ir::Guard::Moved { along, op, value } => {
+                let axis = self.axis_vector(along, rig);
+                let tool = rig.tool();
+                let moved = if along.axis.is_rotation() {
+                    (tool.rotation * self.entry_tool.rotation.inverse())
+                        .scaled_axis()
+                        .dot(&axis)
+                } else {
+                    (tool.translation.vector - self.entry_tool.translation.vector).dot(&axis)
+                };
+                op.holds(moved, *value)
+            }
+            ir::Guard::MovedDistance { op, value_m } => {
+                let moved = rig.tool().translation.vector - self.entry_tool.translation.vector;
+                op.holds(moved.norm(), *value_m)
+            }
+            ir::Guard::ForceMagnitude { op, rhs } => {
+                op.holds(sensed.applied.fixed_rows::<3>(0).norm(), self.scaled_threshold(*rhs))
+            }
+            ir::Guard::MomentMagnitude { op, rhs } => {
+                op.holds(sensed.applied.fixed_rows::<3>(3).norm(), self.scaled_threshold(*rhs))
             }
             ir::Guard::MotionDone => self.motion_done(t),
             ir::Guard::ForceReached { tolerance_n } => sensed.force_error_max.is_some_and(|e| e <= *tolerance_n),

@@ -1,0 +1,126 @@
+//! The displacement and magnitude guards in simulation (issue 12): a press whose click is the
+//! cap's travel (`moved(contact.z) >= 6 mm`) clicks on the shipped button and fails on a jammed
+//! one, and a touch whose contact guard is `force_magnitude` meets a tilted table where the
+//! force along the demonstrated normal alone stays below its threshold. The skills are in
+//! `tests/data/`; they learn from the shipped press and touch demonstrations.
+
+use std::path::PathBuf;
+
+use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog, RunReport};
+use skill_runtime::skill::{LearnOptions, Learned};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn learn(file: &str, demo: &str) -> (skill_ir::Skill, Learned) {
+    let Ok((_, ir)) = skillc::load::load_skill(&root().join(file), None) else {
+        panic!("{file} compiles")
+    };
+    let demo = root().join(format!("examples/demos/{demo}.csv"));
+    let Ok(learned) = skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
+        panic!("{file} learns from {}", demo.display())
+    };
+    (ir, learned)
+}
+
+fn run(skill: &skill_ir::Skill, learned: &Learned, scene: &str, sets: &[&str]) -> (RunReport, RunLog) {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
+        panic!("scene loads")
+    };
+    let bound = bind(skill, learned).expect("binds");
+    simulate(&scene, Mode::Skill(&bound), &ExecOptions::default()).expect("runs")
+}
+
+/// The ticks of the first visit of `state`.
+fn ticks_in<'l>(log: &'l RunLog, state: &str) -> Vec<&'l skill_runtime::exec::Tick> {
+    let index = log
+        .states
+        .iter()
+        .position(|name| name == state)
+        .expect("the state is logged") as u32;
+    log.ticks
+        .iter()
+        .skip_while(|tick| tick.state != index)
+        .take_while(|tick| tick.state == index)
+        .collect()
+}
+
+/// The tool point's travel along the compliant z between the first and the last tick of `state`.
+fn travel_along_z(log: &RunLog, state: &str) -> f64 {
+    let ticks = ticks_in(log, state);
+    let (first, last) = (ticks.first().expect("ticks"), ticks.last().expect("ticks"));
+    (0..3)
+        .map(|axis| (last.measured[axis] - first.measured[axis]) * last.frame_z[axis])
+        .sum()
+}
+
+#[test]
+fn a_click_guard_on_the_caps_travel_clicks_on_the_button_and_not_on_a_jammed_one() {
+    let (skill, learned) = learn("tests/data/press_click.skill", "press");
+    let (report, log) = run(&skill, &learned, "button.toml", &[]);
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+    let travel = travel_along_z(&log, "press");
+    eprintln!(
+        "shipped button: clicked after {:.2} mm in {:.2} s",
+        travel * 1e3,
+        ticks_in(&log, "press").len() as f64 * 1e-3
+    );
+    // The guard fires at the tick the tool has moved 6 mm (the first logged tick of the state is
+    // the one after its entry, so a little less is measured here).
+    assert!((0.0059..0.0065).contains(&travel), "travel {travel} m");
+
+    // The same cap with 0.5 mm of travel: it stops on its lower stop and never clicks.
+    let (report, log) = run(&skill, &learned, "button.toml", &["button.travel=0.0005"]);
+    assert_eq!(report.outcome, skill_ir::Outcome::Failure);
+    assert_eq!(report.terminal.as_deref(), Some("jammed"), "{}", report.message);
+    let travel = travel_along_z(&log, "press");
+    eprintln!("jammed button: {:.2} mm, then {}", travel * 1e3, report.message);
+    assert!(travel < 0.002, "travel {travel} m");
+}
+
+#[test]
+fn a_force_magnitude_guard_fires_on_a_tilted_table_before_the_normal_component_would() {
+    let (skill, learned) = learn("tests/data/touch_any_direction.skill", "touch");
+    let touch = learned.thresholds.get("touch").expect("the touch threshold").value;
+    // The table narrowed to 10 cm, 3 cm lower (so that its tilted top stays below the tool's
+    // start) and tilted 50° about y: its normal is 50° from the demonstrated one.
+    let sets = [
+        "table.size=[0.1, 0.8, 0.05]",
+        "table.xyz=[0.55, 0.0, 0.245]",
+        "table.rpy=[0.0, 0.8726646, 0.0]",
+    ];
+    let (report, log) = run(&skill, &learned, "table.toml", &sets);
+    assert!(
+        report.visits.iter().any(|visit| visit.state == "settle"),
+        "the approach ends on contact: {}",
+        report.message
+    );
+    // Over the whole approach the force along the contact z stayed below the threshold: a
+    // `force(contact.z) >= touch` guard would not have fired yet.
+    let approach = ticks_in(&log, "approach");
+    let most_along_z = approach.iter().map(|tick| tick.wrench_cf[2]).fold(f64::MIN, f64::max);
+    let magnitude = |tick: &skill_runtime::exec::Tick| tick.wrench_base[..3].iter().map(|f| f * f).sum::<f64>().sqrt();
+    let first_settle = ticks_in(&log, "settle")[0];
+    let ended_s = approach.last().expect("ticks").t_s;
+    eprintln!(
+        "tilted table, force_magnitude: contact at {ended_s:.2} s, |F| {:.2} N, at most {most_along_z:.2} N along the contact z (threshold {touch:.2} N); {}",
+        magnitude(first_settle),
+        report.message
+    );
+    assert!(most_along_z < touch, "the z component reached {most_along_z} N");
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+
+    // The standard touch on the same table waits for the z component: it meets the table later
+    // and harder.
+    let (standard, standard_learned) = learn("stdlib-skills/touch.skill", "touch");
+    let (_, log) = run(&standard, &standard_learned, "table.toml", &sets);
+    let approach = ticks_in(&log, "approach");
+    let peak = approach.iter().map(|tick| magnitude(tick)).fold(0.0, f64::max);
+    let standard_ended_s = approach.last().expect("ticks").t_s;
+    eprintln!(
+        "tilted table, force(contact.z): contact at {standard_ended_s:.2} s, |F| up to {peak:.2} N in the approach"
+    );
+    assert!(standard_ended_s > ended_s);
+}

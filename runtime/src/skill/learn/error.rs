@@ -44,6 +44,28 @@ pub enum LearnError {
         /// The feature.
         name: String,
     },
+    /// A segment too short for `constant(...)` to find a steady force in (a tap).
+    #[error(
+        "segment {segment} lasts {:.0} ms ({samples} samples), too short for `{name} = constant(segment {segment}, ...)`: \
+         it looks for a steady force over at least half the segment and needs a segment of {:.0} ms and {required_samples} samples or more; \
+         learn the force at one point instead, `force {name} = force_at(end(segment {segment}), along: ...)`",
+        duration_s * 1e3,
+        required_s * 1e3
+    )]
+    TooShortForConstant {
+        /// 1-based segment.
+        segment: usize,
+        /// Its samples.
+        samples: usize,
+        /// Its duration \[s\].
+        duration_s: f64,
+        /// The shortest segment `constant(...)` learns from \[s\].
+        required_s: f64,
+        /// The fewest samples `constant(...)` learns from.
+        required_samples: usize,
+        /// The force.
+        name: String,
+    },
     /// No contact force where the template needs one.
     #[error("no contact in `{source_name}` for `{name}`: the largest force is {peak_n:.2} N")]
     NoContact {

@@ -29,9 +29,24 @@ impl Learner<'_> {
                 let seg = self.seg(*segment);
                 let t = self.segment_times(seg, &decl.name, segment.index())?;
                 let profile: Vec<f64> = seg.range().map(|k| self.applied_along(k, *along)).collect();
+                // The steady region must last `min_region_s` (0.2 s) or, in a shorter segment
+                // (a tap), half the segment: a time, whatever the sampling rate.
+                let duration_s = t[t.len() - 1] - t[0];
+                if duration_s < MIN_CONSTANT_SEGMENT_S || seg.len() < MIN_CONSTANT_SAMPLES {
+                    return Err(LearnError::TooShortForConstant {
+                        segment: segment.index() + 1,
+                        samples: seg.len(),
+                        duration_s,
+                        required_s: MIN_CONSTANT_SEGMENT_S,
+                        required_samples: MIN_CONSTANT_SAMPLES,
+                        name: decl.name.clone(),
+                    });
+                }
+                let defaults = ConstantForceConfig::default();
                 let config = ConstantForceConfig {
                     contact_threshold_n: CONTACT_N,
-                    ..ConstantForceConfig::default()
+                    min_region_s: defaults.min_region_s.min(duration_s / 2.0),
+                    ..defaults
                 };
                 let found = constant_normal_force(&t, &profile, &config).map_err(|err| match err {
                     ForceError::NoContact { peak_n, .. } => LearnError::NoContact {
@@ -124,6 +139,15 @@ fn force_rms(dmp: &Dmp, t: &[f64], demo: impl Fn(usize, usize) -> f64) -> f64 {
     }
     (sum / count.max(1.0)).sqrt()
 }
+
+/// The shortest segment `constant(...)` learns from \[s\]: its steady region (half the segment
+/// at most) then lasts 50 ms or more.
+pub(super) const MIN_CONSTANT_SEGMENT_S: f64 = 0.1;
+
+/// The fewest samples `constant(...)` learns from: with fewer, change-point detection cannot
+/// set a touch-down apart from the plateau and the value is the plain mean (a 5 N tap with a
+/// 30 ms rise at 100 Hz: 4.3 N from 12 or 15 samples, 5.04 N from 20).
+pub(super) const MIN_CONSTANT_SAMPLES: usize = 20;
 
 #[cfg(test)]
 mod tests {

@@ -1,8 +1,9 @@
 //! The displacement and magnitude guards in simulation (issue 12): a press whose click is the
 //! cap's travel (`moved(contact.z) >= 6 mm`) clicks on the shipped button and fails on a jammed
 //! one, and a touch whose contact guard is `force_magnitude` meets a tilted table where the
-//! force along the demonstrated normal alone stays below its threshold. The skills are in
-//! `tests/data/`; they learn from the shipped press and touch demonstrations.
+//! force along the demonstrated normal alone stays below its threshold; and an `extend` in a
+//! state without `move` searches (it moves the held pose). The skills are in `tests/data/`; they
+//! learn from the shipped press and touch demonstrations.
 
 use std::path::PathBuf;
 
@@ -123,4 +124,22 @@ fn a_force_magnitude_guard_fires_on_a_tilted_table_before_the_normal_component_w
         "tilted table, force(contact.z): contact at {standard_ended_s:.2} s, |F| up to {peak:.2} N in the approach"
     );
     assert!(standard_ended_s > ended_s);
+}
+
+#[test]
+fn an_extend_in_a_state_without_move_moves_the_held_pose_until_contact() {
+    let (skill, learned) = learn("tests/data/touch_search_without_move.skill", "touch");
+    // The table 5 cm lower than demonstrated: the approach ends in free space, the search finds it.
+    let (report, log) = run(&skill, &learned, "table.toml", &["table.z=0.225"]);
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+    let search = ticks_in(&log, "search");
+    let (first, last) = (search.first().expect("ticks"), search.last().expect("ticks"));
+    let down_m = first.measured[2] - last.measured[2];
+    eprintln!(
+        "search without move: {:.1} mm down in {:.2} s",
+        down_m * 1e3,
+        last.t_s - first.t_s
+    );
+    assert!(down_m > 0.03, "moved {down_m} m down");
+    assert!(report.visits.iter().any(|visit| visit.state == "settle"));
 }

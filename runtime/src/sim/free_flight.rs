@@ -11,11 +11,32 @@
 //! mass matrix it solves with), this explicitly: an O(dt) difference in free motion, about
 //! 1e-9 rad a step at the skills' speeds, which the controller's feedback absorbs.
 //!
-//! A step is free when every collider's bounding sphere stays farther from every object's box
-//! than [`CLEAR_MARGIN_M`] plus the farthest any point of the arm can move in the step, no joint
-//! leaves its limits in it, and the scene has no moving object (a button's cap is a body rapier
-//! moves). While the arm flies free, rapier's multibody keeps the state of the last rapier step;
-//! the plant writes the arm's state back into it before the next step that needs rapier.
+//! A step is free when every shape of the arm stays farther from every object than rapier's
+//! contact prediction distance plus [`CLEAR_MARGIN_M`] plus the farthest any point of the arm
+//! can move in the step (bounding spheres first, then parry's distance), every joint starts and
+//! ends the step strictly inside its limits (rapier's limit constraint acts only on a joint that
+//! starts at or beyond a limit), and the scene has no moving object: any body rapier moves other
+//! than the arm's links (a button's cap) or any impulse joint rules free flight out for the
+//! whole run, since rapier would have to step it. While the arm flies free, rapier's multibody
+//! keeps the state of the last rapier step; the plant writes the arm's state back into it before
+//! the next step that needs rapier.
+//!
+//! **Why this is rapier's step.** rapier finds contacts at a step's start, at the positions the
+//! step starts from, and generates no contact point between shapes farther apart than its
+//! prediction distance; with every shape farther than that, its step has no contact constraint,
+//! no joint limit constraint (every joint inside its limits) and no other moving body: its
+//! multibody step is the free equations of motion. The motion bound is a margin on top: a step
+//! that ends within the prediction distance is still taken free, but the next one is rapier's.
+//! The wrist sensor reads contact wrenches only (no inertial load), so in free flight it reads a
+//! zero wrench through the same noise, bias and filter.
+//!
+//! **The motion bound.** A point `p` of the arm moves at `Σᵢ q̇ᵢ aᵢ × (p − oᵢ)` (`aᵢ`, `oᵢ` joint
+//! i's unit axis and a point on it), so at most `Σᵢ |q̇ᵢ| · |p − oᵢ|`. Every joint origin lies
+//! within the chain's length `L = Σ |pos0|` of the base origin, every shape's bounding sphere
+//! within `L` plus its centre's offset `c` plus its radius `r`: `|p − oᵢ| ≤ 2L + c + r`, the
+//! `reach`, whatever the configuration and however the links turn. The step moves the joints by
+//! `dt q̇⁺` along a straight line in joint space (semi-implicit Euler), so no point moves farther
+//! than `dt · reach · Σᵢ |q̇⁺ᵢ|`, the velocity after the step's acceleration.
 // `Real` is f32 or f64 depending on the rapier flavour: casts and conversions to it are identities in one.
 #![allow(clippy::unnecessary_cast, clippy::useless_conversion)]
 
@@ -83,8 +104,10 @@ pub(super) struct FreeFlight {
     /// The robot model with the scene's gravity.
     robot: Robot,
     data: RobotData,
-    /// Whether free flight may be used at all (no moving objects in the scene).
+    /// Whether the scene allows free flight at all (no moving objects).
     allowed: bool,
+    /// Whether the plant's user allows it ([`FreeFlight::set_enabled`]; on by default).
+    enabled: bool,
     /// Whether the arm's state lives here (rapier's multibody is stale) rather than in rapier.
     pub(super) active: bool,
     /// Joint positions (rad) and velocities (rad/s): the arm's state while active, else the
@@ -204,6 +227,7 @@ impl FreeFlight {
             data: robot.data(),
             zeros: vec![0.0; n],
             allowed: !moving_objects && !bounds.is_empty(),
+            enabled: true,
             active: false,
             kinematics_at_q: false,
             disp: vec![0.0; n],
@@ -223,9 +247,15 @@ impl FreeFlight {
         }
     }
 
-    /// Whether free flight may be used in this scene.
+    /// Whether free flight may be used: the scene allows it and the user has not switched it off.
     pub(super) fn allowed(&self) -> bool {
-        self.allowed
+        self.allowed && self.enabled
+    }
+
+    /// Allows (`true`, the default) or forbids free flight. Forbidding it takes effect at the
+    /// next step, which lands an active flight and is rapier's.
+    pub(super) fn set_enabled(&mut self, enabled: bool) {
+        self.enabled = enabled;
     }
 
     /// Marks `q` and `qd` as just loaded from rapier.
@@ -249,45 +279,37 @@ impl FreeFlight {
     }
 
     /// Tries one free step of `dt` from the state in `q`, `qd` under joint torques `torque`:
-    /// when no collider can come within [`CLEAR_MARGIN_M`] of an object and every joint stays
-    /// strictly inside its limits, advances the state, marks the flight active and returns
-    /// `true`; otherwise changes nothing and returns `false` (rapier must take the step).
+    /// when every joint starts and ends the step strictly inside its limits and no shape of the
+    /// arm comes within the clearance plus the step's motion bound of an object (see the module
+    /// documentation), advances the state, marks the flight active and returns `true`;
+    /// otherwise changes nothing and returns `false` (rapier must take the step).
     pub(super) fn try_step(&mut self, torque: &[f64], dt: f64) -> bool {
-        if !self.allowed {
+        if !self.allowed() {
             return false;
         }
-        let (q, qd) = (&self.q, &self.qd);
+        // rapier's limit constraint acts in a step that starts at or beyond a limit
+        // (`RapierPlant::gate_joint_limits` switches it on by the same test).
+        let inside = self
+            .robot
+            .position_limits()
+            .zip(&self.q)
+            .all(|((lower, upper), q)| *q > lower && *q < upper);
+        if !inside {
+            return false;
+        }
         if !self.kinematics_at_q {
-            self.robot.forward_kinematics(&mut self.data, q);
+            self.robot.forward_kinematics(&mut self.data, &self.q);
             self.kinematics_at_q = true;
         }
-        // rapier finds contacts at the step's start: none within its prediction distance, no
-        // contact force in the step. The motion bound keeps a margin all the same.
-        let speed_bound: f64 = qd.iter().map(|v| v.abs()).sum::<f64>() * self.reach;
-        let margin = self.clearance + speed_bound * dt;
-        for bound in &self.bounds {
-            let (rot, pos) = (&self.data.rot[bound.body], &self.data.pos[bound.body]);
-            let center = rot * bound.center + pos;
-            for object in &self.objects {
-                let outside = (object.min - center).sup(&(center - object.max)).sup(&Vector3::zeros());
-                if outside.norm() - bound.radius > margin {
-                    continue;
-                }
-                // Close by the spheres: the shapes' own distance decides.
-                let body_pose = Pose::from_parts(vec3(pos), quat_of(rot));
-                let distance = rapier3d::parry::query::distance(
-                    &(body_pose * bound.in_body),
-                    bound.shape.as_ref(),
-                    &object.pose,
-                    object.shape.as_ref(),
-                );
-                match distance {
-                    Ok(found) if f64::from(found.distance) > margin => {}
-                    _ => return false,
-                }
-            }
-        }
+        // First with the motion bound from the velocity at the step's start (cheap, and it
+        // refuses the steps near contact before any dynamics), keeping the smallest distance
+        // found: checked again below against the bound from the velocity after the step.
+        let start_speed: f64 = self.qd.iter().map(|v| v.abs()).sum();
+        let Some(gap) = self.gap_beyond(self.clearance + dt * self.reach * start_speed) else {
+            return false;
+        };
         // q̈ = M⁻¹ (τ − C q̇ − g − d q̇⁺), the damping implicit: (M + dt d I) q̈ = τ − C q̇ − g − d q̇.
+        let (q, qd) = (&self.q, &self.qd);
         self.robot
             .inverse_dynamics(&mut self.data, qd, &self.zeros, &mut self.bias);
         self.robot.mass_matrix(&mut self.data, &mut self.mass);
@@ -307,11 +329,49 @@ impl FreeFlight {
                 return false;
             }
         }
+        // The step moves the joints by dt q̇⁺: no point of the arm moves farther than this.
+        let motion = dt * self.reach * self.qd_next.iter().map(|v| v.abs()).sum::<f64>();
+        if gap <= self.clearance + motion {
+            return false;
+        }
         self.q.copy_from_slice(&self.q_next);
         self.qd.copy_from_slice(&self.qd_next);
         self.robot.forward_kinematics(&mut self.data, &self.q);
         self.active = true;
         true
+    }
+
+    /// The smallest distance between a shape of the arm (at the kinematics in `data`) and an
+    /// object, or a lower bound on it (a bounding sphere's distance from an object's box) where
+    /// that bound exceeds `margin`; `None` when some shape lies within `margin` of an object (or
+    /// parry cannot tell the distance).
+    fn gap_beyond(&self, margin: f64) -> Option<f64> {
+        let mut gap = f64::INFINITY;
+        for bound in &self.bounds {
+            let (rot, pos) = (&self.data.rot[bound.body], &self.data.pos[bound.body]);
+            let center = rot * bound.center + pos;
+            for object in &self.objects {
+                let outside = (object.min - center).sup(&(center - object.max)).sup(&Vector3::zeros());
+                let sphere_gap = outside.norm() - bound.radius;
+                if sphere_gap > margin {
+                    gap = gap.min(sphere_gap);
+                    continue;
+                }
+                // Close by the spheres: the shapes' own distance decides.
+                let body_pose = Pose::from_parts(vec3(pos), quat_of(rot));
+                let distance = rapier3d::parry::query::distance(
+                    &(body_pose * bound.in_body),
+                    bound.shape.as_ref(),
+                    &object.pose,
+                    object.shape.as_ref(),
+                );
+                match distance {
+                    Ok(found) if f64::from(found.distance) > margin => gap = gap.min(f64::from(found.distance)),
+                    _ => return None,
+                }
+            }
+        }
+        Some(gap)
     }
 }
 
@@ -352,4 +412,130 @@ fn cholesky_solve_in_place(a: &mut DMatrix<f64>, b: &mut [f64]) -> bool {
         b[row] = value / a[(row, row)];
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plant::Plant;
+    use crate::sim::{RapierPlant, Scene};
+
+    /// table.toml's arm with the table `drop_m` lower (the probe tip starts 1 mm above it).
+    fn table_plant(drop_m: f64) -> RapierPlant {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes/table.toml");
+        let mut scene = Scene::from_file(&path).expect("example scene loads");
+        scene.set("table.z", &(0.275 - drop_m).to_string()).expect("valid z");
+        RapierPlant::from_scene(&scene).expect("scene builds")
+    }
+
+    /// The gravity torques at `q`.
+    fn gravity(robot: &Robot, q: &[f64]) -> Vec<f64> {
+        let mut data = robot.data();
+        robot.forward_kinematics(&mut data, q);
+        let mut out = vec![0.0; robot.dof()];
+        robot.gravity_torques(&mut data, &mut out);
+        out
+    }
+
+    /// Puts the flight at `q`, `qd` as if loaded from rapier.
+    fn load(free: &mut FreeFlight, q: &[f64], qd: &[f64]) {
+        free.q.copy_from_slice(q);
+        free.qd.copy_from_slice(qd);
+        free.active = false;
+        free.loaded();
+    }
+
+    #[test]
+    fn the_motion_bound_covers_every_point_of_every_shape() {
+        // Random configurations and joint motions Δq (up to 0.3 rad a joint): no point of any
+        // shape's bounding sphere moves farther than reach · Σ|Δqᵢ|. A point of a sphere moves
+        // at most its centre's displacement plus its radius times the body's rotation angle.
+        let plant = table_plant(5.0);
+        let free = plant.free.as_ref().expect("built");
+        let robot = &free.robot;
+        let (mut before, mut after) = (robot.data(), robot.data());
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut tightest: f64 = 0.0;
+        for _ in 0..2000 {
+            let q: Vec<f64> = robot
+                .position_limits()
+                .map(|(lo, hi)| lo + (hi - lo) * uniform())
+                .collect();
+            let dq: Vec<f64> = q.iter().map(|_| 0.6 * (uniform() - 0.5)).collect();
+            let moved: Vec<f64> = q.iter().zip(&dq).map(|(q, d)| q + d).collect();
+            robot.forward_kinematics(&mut before, &q);
+            robot.forward_kinematics(&mut after, &moved);
+            let bound = free.reach * dq.iter().map(|d| d.abs()).sum::<f64>();
+            for shape in &free.bounds {
+                let centre = |data: &RobotData| data.rot[shape.body] * shape.center + data.pos[shape.body];
+                let turn = nalgebra::Rotation3::from_matrix_unchecked(
+                    after.rot[shape.body] * before.rot[shape.body].transpose(),
+                )
+                .angle();
+                let farthest = (centre(&after) - centre(&before)).norm() + shape.radius * turn;
+                assert!(farthest <= bound, "a point moved {farthest} m, bound {bound} m");
+                tightest = tightest.max(farthest / bound);
+            }
+        }
+        // The bound is conservative, not absurd: the fastest point uses a fair share of it.
+        assert!(tightest > 0.1, "the fastest point moved {tightest} of the bound");
+    }
+
+    #[test]
+    fn a_joint_at_or_beyond_its_limit_is_left_to_rapier() {
+        // rapier's limit constraint acts in a step that starts beyond the limit, even when the
+        // joint moves back in within it.
+        let mut plant = table_plant(5.0);
+        let robot = plant.robot().clone();
+        let q0 = plant.observe().q.as_slice().to_vec();
+        let (_, upper) = robot.position_limits().nth(3).expect("7 joints");
+        let free = plant.free.as_mut().expect("built");
+        let mut qd = vec![0.0; 7];
+        qd[3] = -1.0;
+        for (offset, free_step) in [(-2e-3, true), (0.0, false), (1e-4, false)] {
+            let mut q = q0.clone();
+            q[3] = upper + offset;
+            load(free, &q, &qd);
+            let tau = gravity(&robot, &q);
+            assert_eq!(
+                free.try_step(&tau, 1e-3),
+                free_step,
+                "joint 4 at its limit {offset:+} rad"
+            );
+        }
+        // A step that would end beyond it is rapier's too.
+        let mut q = q0.clone();
+        q[3] = upper - 2e-4;
+        qd[3] = 1.0;
+        load(free, &q, &qd);
+        assert!(!free.try_step(&gravity(&robot, &q), 1e-3));
+    }
+
+    #[test]
+    fn the_motion_bound_takes_the_velocity_after_the_step() {
+        // The probe tip 6.5 mm above the table, at rest: clear by 0.5 mm beyond the 6 mm
+        // clearance. Holding still it flies free; a torque that accelerates the wrist to about
+        // 1 rad/s within the step could carry it farther than that, so rapier takes the step
+        // (a bound from the velocity at the step's start, zero, would have let it fly).
+        let mut plant = table_plant(0.0055);
+        let robot = plant.robot().clone();
+        let q = plant.observe().q.as_slice().to_vec();
+        let hold = gravity(&robot, &q);
+        let free = plant.free.as_mut().expect("built");
+        assert!((free.clearance - 0.006).abs() < 1e-12, "clearance {}", free.clearance);
+        load(free, &q, &[0.0; 7]);
+        assert!(free.try_step(&hold, 1e-3), "holding still 6.5 mm above the table");
+        let mut mass = DMatrix::zeros(7, 7);
+        robot.mass_matrix(&mut free.data, &mut mass);
+        let mut kick = hold.clone();
+        kick[5] += 1e3 * mass[(5, 5)];
+        load(free, &q, &[0.0; 7]);
+        assert!(!free.try_step(&kick, 1e-3), "kicked 6.5 mm above the table");
+    }
 }

@@ -11,6 +11,6 @@ mod scene;
 mod sensor;
 
 pub use convert::SIM_F64;
-pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError};
+pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError, StepCounts};
 pub use scene::{ObjectKind, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec, ToolStart};
 pub use sensor::{SensorConfig, WristSensor};

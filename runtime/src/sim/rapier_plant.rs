@@ -75,6 +75,15 @@ impl Default for RapierOptions {
     }
 }
 
+/// How a plant's steps were taken: [`RapierPlant::step_counts`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StepCounts {
+    /// Steps in free flight: integrated from the robot model, rapier's pipeline skipped.
+    pub free: u64,
+    /// Steps rapier took.
+    pub rapier: u64,
+}
+
 /// The robot and scene simulated by rapier, 1 ms steps, torque-controlled.
 ///
 /// **Precision.** rapier's scalar is [`Real`](rapier3d::math::Real): `f32` with the crate `rapier3d`
@@ -105,12 +114,18 @@ impl Default for RapierOptions {
 /// (`runtime/benches/robot_sim.rs` has both); one collider per shape cost about 3 µs.
 ///
 /// **Free flight.** A step in which no shape of the arm is within rapier's contact prediction
-/// distance (5 mm) plus 1 mm plus the step's largest motion of any object cannot produce a
-/// contact; in a scene without moving objects the plant then integrates the arm itself from the
-/// robot model, semi-implicit Euler as rapier, and skips rapier's pipeline (see `free_flight`).
-/// rapier's multibody step costs about 5× more. The two agree to about 1e-7 over a 4 s approach
-/// (rapier's Coriolis term is semi-implicit, this one explicit); an impact then magnifies that,
-/// as it does any rounding-level change (peaks move by a few tenths of a newton).
+/// distance (5 mm) plus 1 mm plus the step's largest motion of any point of the arm, and no joint
+/// at or beyond a limit, cannot produce a contact or a limit impulse; in a scene in which nothing
+/// but the arm moves (no dynamic body besides its links, no other joint: a button rules it out)
+/// the plant then integrates the arm itself from the robot model, semi-implicit Euler as rapier,
+/// and skips rapier's pipeline (see `free_flight`). rapier's multibody step costs about 5× more.
+/// rapier's Coriolis term is semi-implicit, this one explicit: both are first order, and free
+/// flight stays as close to the converged motion as rapier's own step (`runtime/tests/free_flight.rs`:
+/// 1.8e-3 vs 1.8e-3 rad over 2 s of open-loop torques, 3.1e-4 vs 3.1e-4 rad for the hybrid
+/// controller's 3 s circle; free vs rapier 4.3e-4 and 9.7e-5 rad). An impact magnifies any such
+/// difference, as it does any rounding-level change (peaks move by a few tenths of a newton).
+/// [`RapierPlant::set_free_flight`] switches it off (rapier takes every step);
+/// [`RapierPlant::step_counts`] tells how many steps each took.
 ///
 /// **Buttons.** A button's cap is a light dynamic body on a prismatic multibody joint, pushed up by a spring
 /// applied every step. Its lower stop is a fixed collider the tool rests on once the cap is fully pressed
@@ -163,6 +178,9 @@ pub struct RapierPlant {
     /// Whether rapier has taken a step (free flight starts only after one: rapier sets masses
     /// and the active set up in its first step).
     pub(super) rapier_stepped: bool,
+    /// How many steps rapier took, and how many the plant took in free flight.
+    pub(super) steps_rapier: u64,
+    pub(super) steps_free: u64,
 }
 
 /// How deep a start may put a collider inside an object \[m\]: rapier's contact slop.
@@ -340,6 +358,8 @@ impl RapierPlant {
             free: None,
             joint_links: Vec::with_capacity(n),
             rapier_stepped: false,
+            steps_rapier: 0,
+            steps_free: 0,
             robot,
         };
         plant.build_arm(&q0, sensor_link, options);
@@ -363,13 +383,22 @@ impl RapierPlant {
             arm: &arm,
             objects: &objects,
         };
+        // Any body rapier moves besides the arm's links (a button's cap today, whatever an
+        // object kind adds tomorrow), or any joint outside the arm's multibody, must be stepped by
+        // rapier every step: free flight then never applies.
+        let moving_objects = plant
+            .bodies
+            .iter()
+            .any(|(handle, body)| !body.is_fixed() && !plant.links.contains(&handle))
+            || plant.impulse_joints.iter().next().is_some()
+            || plant.multibody_joints.multibodies().count() > 1;
         plant.free = Some(FreeFlight::new(
             plant.robot.clone(),
             nalgebra::Vector3::from(spec.sim.gravity),
             options.joint_damping,
             f64::from(plant.params.prediction_distance()),
             &world,
-            !plant.buttons.is_empty(),
+            moving_objects,
         ));
         Ok(plant)
     }
@@ -517,6 +546,25 @@ impl RapierPlant {
             }
         }
         Ok(Some(free))
+    }
+
+    /// Allows (`true`, the default) or forbids free flight: with `false` rapier takes every step,
+    /// as it did before free flight existed, to check free flight against rapier or to time
+    /// rapier alone. Free flight applies only where the scene allows it (no moving objects) and
+    /// no shape of the arm can touch an object in the step, whatever this says.
+    pub fn set_free_flight(&mut self, allowed: bool) {
+        if let Some(free) = self.free.as_mut() {
+            free.set_enabled(allowed);
+        }
+    }
+
+    /// How many steps the plant took in free flight (the arm integrated from the robot model,
+    /// rapier's pipeline skipped) and how many rapier took, since it was built.
+    pub fn step_counts(&self) -> StepCounts {
+        StepCounts {
+            free: self.steps_free,
+            rapier: self.steps_rapier,
+        }
     }
 
     /// The robot model the plant simulates.
@@ -769,10 +817,12 @@ impl Plant for RapierPlant {
         self.params.dt = dt as Real;
         if self.free_step(dt) {
             self.t += dt;
+            self.steps_free += 1;
             return Ok(());
         }
         self.land();
         self.rapier_stepped = true;
+        self.steps_rapier += 1;
         self.gate_joint_limits();
         self.apply_joint_torques();
         self.pipeline.step(

@@ -167,7 +167,11 @@ mod tests {
             let stroke = ((t / stroke_s) as usize).min(count - 1);
             let u = ((t - stroke as f64 * stroke_s) / stroke_s).clamp(0.0, 1.0);
             let progress = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
-            let along = if stroke.is_multiple_of(2) { progress } else { 1.0 - progress };
+            let along = if stroke.is_multiple_of(2) {
+                progress
+            } else {
+                1.0 - progress
+            };
             let noise = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * noise_m;
             let sway = side * (0.08 * length_m) * (std::f64::consts::PI * along).sin();
             t_s.push(t);

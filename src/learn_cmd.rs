@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use skill_runtime::demo::{Dialect, ForceSign, WrenchDeclaration, WrenchFrame, COLUMNS};
 use skill_runtime::exec::bind;
+use skill_runtime::skill::rollout::PreviewSample;
 use skill_runtime::skill::{LearnOptions, Learned, LearnedForce, LearnedFrame};
 
 use crate::load::{learn_from_source, load_skill, read_learned, Failure};
@@ -73,7 +74,7 @@ pub struct LearnArgs {
     pub friction: Option<f64>,
     /// MCAP: the `geometry_msgs/PoseStamped` topic with the flange pose in the base frame
     /// (default: the file's only PoseStamped topic, else TF).
-    #[arg(long, value_name = "TOPIC")]
+    #[arg(long, value_name = "TOPIC", conflicts_with_all = ["tf_parent", "tf_child"])]
     pub pose_topic: Option<String>,
     /// MCAP: the `geometry_msgs/WrenchStamped` topic (default: the file's only one). Its header
     /// frame declares the wrench's axes when it names the pose's base frame or the TF tool frame.
@@ -154,11 +155,15 @@ pub fn parse_columns(text: &str) -> Result<BTreeMap<String, String>, String> {
 /// Runs `skillc learn`.
 pub fn run(args: &LearnArgs, verbosity: Verbosity) -> u8 {
     let started = std::time::Instant::now();
-    let result = learn(args).and_then(|summary| {
+    let result = learn(args).and_then(|(summary, warnings)| {
         if verbosity.verbose() {
             eprintln!("learned in {:.2} s", started.elapsed().as_secs_f64());
         }
         if verbosity.quiet() {
+            // The summary (which lists them) is not printed: the warnings still are.
+            for warning in warnings {
+                eprintln!("warning: {warning}");
+            }
             Ok(())
         } else {
             out::print(&summary)
@@ -170,8 +175,39 @@ pub fn run(args: &LearnArgs, verbosity: Verbosity) -> u8 {
     }
 }
 
-fn learn(args: &LearnArgs) -> Result<String, Failure> {
+/// The flags that only apply to the other kind of demonstration file: given, they would be
+/// silently ignored.
+fn refuse_other_kinds_flags(args: &LearnArgs) -> Result<(), Failure> {
+    let demo = args.demo.display();
+    if crate::ros::is_mcap(&args.demo) {
+        let csv_flags = [
+            ("--delimiter", args.delimiter.is_some()),
+            ("--columns", args.columns.is_some()),
+        ];
+        if let Some((flag, _)) = csv_flags.iter().find(|(_, given)| *given) {
+            return Err(Failure::Usage(format!(
+                "{flag} is for CSV demonstrations; `{demo}` is a ROS 2 bag (MCAP): choose its topics with --pose-topic/--wrench-topic or --tf-parent/--tf-child"
+            )));
+        }
+    } else {
+        let bag_flags = [
+            ("--pose-topic", args.pose_topic.is_some()),
+            ("--wrench-topic", args.wrench_topic.is_some()),
+            ("--tf-parent", args.tf_parent.is_some()),
+            ("--tf-child", args.tf_child.is_some()),
+        ];
+        if let Some((flag, _)) = bag_flags.iter().find(|(_, given)| *given) {
+            return Err(Failure::Usage(format!(
+                "{flag} is for ROS 2 bags (`.mcap` files); `{demo}` is read as CSV"
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn learn(args: &LearnArgs) -> Result<(String, Vec<String>), Failure> {
     atomic::refuse_inputs(&args.output, "-o", &[&args.skill_file, &args.demo]).map_err(Failure::Usage)?;
+    refuse_other_kinds_flags(args)?;
     let (_, skill) = load_skill(&args.skill_file, args.skill.as_deref())?;
     let options = LearnOptions {
         lowpass_hz: args.lowpass,
@@ -219,7 +255,7 @@ fn learn(args: &LearnArgs) -> Result<String, Failure> {
             let _ = writeln!(out, "wrote `{}`", path.display());
         }
     }
-    Ok(out)
+    Ok((out, learned.demo.warnings))
 }
 
 /// A short human summary of what was learned.
@@ -390,23 +426,38 @@ pub struct RolloutArgs {
     /// Sample period in seconds (0.0001 to 1).
     #[arg(long, default_value_t = 0.001, value_parser = limits::period_s)]
     pub dt: f64,
+    /// The `.skill` file the learned file was learned from: with it the force and moment
+    /// columns hold the learned forces (each on its segment, as the demonstration stores them:
+    /// the wrench on the tool); without it they are 0.
+    #[arg(long, value_name = "FILE")]
+    pub template: Option<PathBuf>,
 }
 
 /// Most rows `skillc rollout` writes.
 const MAX_ROLLOUT_ROWS: f64 = 5e6;
 
-/// Runs `skillc rollout`: the kinematic rollout of every learned motion in segment order.
+/// Runs `skillc rollout`: the kinematic rollout of every learned motion in segment order, a
+/// segment without a motion held at the last pose for its demonstrated duration, with the
+/// learned forces on their segments when the template is given.
 pub fn rollout(args: &RolloutArgs, verbosity: Verbosity) -> u8 {
     let run = || -> Result<(), Failure> {
         let dt = limits::check("--dt", args.dt, limits::PERIOD_S, " s").map_err(Failure::Usage)?;
         if let Some(path) = &args.output {
-            atomic::refuse_inputs(path, "-o", &[&args.learned]).map_err(Failure::Usage)?;
+            let mut inputs: Vec<&std::path::Path> = vec![&args.learned];
+            inputs.extend(args.template.as_deref());
+            atomic::refuse_inputs(path, "-o", &inputs).map_err(Failure::Usage)?;
         }
         let learned = read_learned(&args.learned)?;
         let rows: f64 = learned
             .motions
             .values()
             .map(|m| (m.position.tau_s / dt).ceil() + 1.0)
+            .chain(
+                learned
+                    .segments
+                    .iter()
+                    .map(|s| ((s.end_s - s.start_s).max(0.0) / dt).ceil()),
+            )
             .sum();
         if rows > MAX_ROLLOUT_ROWS {
             return Err(Failure::Usage(format!(
@@ -423,37 +474,82 @@ pub fn rollout(args: &RolloutArgs, verbosity: Verbosity) -> u8 {
             limits::check("--goal-offset", *value, (-limits::OFFSET_M, limits::OFFSET_M), " m")
                 .map_err(Failure::Usage)?;
         }
-        let (samples, _) = skill_runtime::skill::rollout::preview(&learned, dt, offset);
-        let finite = |s: &skill_runtime::skill::rollout::PreviewSample| {
-            s.position_m
+        let template = match &args.template {
+            Some(path) => {
+                let (_, skill) = load_skill(path, Some(&learned.skill))?;
+                Some((path, skill))
+            }
+            None => None,
+        };
+        let bound = match &template {
+            Some((path, skill)) => Some(bind(skill, &learned).map_err(|err| {
+                Failure::Input(format!(
+                    "`{}` was not learned for skill `{}` of `{}`: {err}",
+                    args.learned.display(),
+                    skill.name,
+                    path.display()
+                ))
+            })?),
+            None => None,
+        };
+        let mut rows = timeline(&learned, dt, offset);
+        let finite = |row: &Row| {
+            row.position_m
                 .iter()
-                .chain(s.orientation.coords.iter())
+                .chain(row.orientation.coords.iter())
+                .chain(row.wrench.iter())
                 .all(|v| v.is_finite())
         };
-        if let Some(bad) = samples.iter().find(|s| !finite(s)) {
+        let unplaced = match &bound {
+            Some(bound) => place_forces(&mut rows, bound, dt),
+            None => Vec::new(),
+        };
+        if let Some(bad) = rows.iter().find(|row| !finite(row)) {
             return Err(Failure::Input(format!(
                 "the rollout of `{}` diverges (not finite at {:.3} s); nothing written",
                 args.learned.display(),
                 bad.t_s
             )));
         }
+        if bound.is_none() && !learned.forces.is_empty() {
+            verbosity.note(format_args!(
+                "note: the force and moment columns are 0: give the template with --template FILE.skill to fill them from the learned forces"
+            ));
+        }
+        for name in unplaced {
+            verbosity.note(format_args!(
+                "note: force `{name}` is not learned over a segment (a point, a literal or none): its columns stay 0"
+            ));
+        }
         let mut text = String::from("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n");
-        for sample in &samples {
-            let q = sample.orientation.quaternion();
-            let p = sample.position_m;
+        for row in &rows {
+            let q = row.orientation.quaternion();
+            let p = row.position_m;
+            let w = row.wrench;
             let _ = writeln!(
                 text,
-                "{:.4},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},0,0,0,0,0,0",
-                sample.t_s, p.x, p.y, p.z, q.w, q.i, q.j, q.k
+                "{:.4},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{},{},{},{}",
+                row.t_s,
+                p.x,
+                p.y,
+                p.z,
+                q.w,
+                q.i,
+                q.j,
+                q.k,
+                column(w[0]),
+                column(w[1]),
+                column(w[2]),
+                column(w[3]),
+                column(w[4]),
+                column(w[5])
             );
         }
         match &args.output {
             Some(path) => {
                 atomic::write(path, text.as_bytes())
                     .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))?;
-                if !verbosity.quiet() {
-                    eprintln!("wrote `{}` ({} samples)", path.display(), samples.len());
-                }
+                verbosity.note(format_args!("wrote `{}` ({} samples)", path.display(), rows.len()));
                 Ok(())
             }
             None => out::print(&text),
@@ -463,4 +559,157 @@ pub fn rollout(args: &RolloutArgs, verbosity: Verbosity) -> u8 {
         Ok(()) => 0,
         Err(failure) => failure.report(),
     }
+}
+
+/// A force or moment column: `0` when there is none, else four decimals.
+fn column(value: f64) -> String {
+    if value == 0.0 {
+        "0".to_string()
+    } else {
+        format!("{value:.4}")
+    }
+}
+
+/// One row of a rollout.
+struct Row {
+    t_s: f64,
+    position_m: nalgebra::Vector3<f64>,
+    orientation: nalgebra::UnitQuaternion<f64>,
+    /// The segment (0-based) the row belongs to.
+    segment: usize,
+    /// The wrench the environment exerts on the tool (the demonstration's columns), base frame.
+    wrench: [f64; 6],
+}
+
+/// The preview's rows in segment order, a segment without a motion held at the last pose (the
+/// first motion's start before any) for its demonstrated duration.
+fn timeline(learned: &Learned, dt: f64, offset: nalgebra::Vector3<f64>) -> Vec<Row> {
+    let (samples, names) = skill_runtime::skill::rollout::preview(learned, dt, offset);
+    let segment_of = |motion: usize| {
+        names
+            .get(motion)
+            .and_then(|name| learned.motions.get(name))
+            .map_or(0, |m| m.segment)
+    };
+    let mut rows: Vec<Row> = Vec::with_capacity(samples.len());
+    let mut shift = 0.0;
+    let mut next = 0;
+    for (segment, span) in learned.segments.iter().enumerate() {
+        let start = next;
+        while next < samples.len() && segment_of(samples[next].motion) == segment {
+            next += 1;
+        }
+        if next > start {
+            push_samples(&mut rows, &samples[start..next], shift, segment);
+            continue;
+        }
+        let Some((t, position_m, orientation)) = rows
+            .last()
+            .map(|r| (r.t_s, r.position_m, r.orientation))
+            .or_else(|| samples.first().map(|s| (s.t_s - dt, s.position_m, s.orientation)))
+        else {
+            continue;
+        };
+        let steps = ((span.end_s - span.start_s).max(0.0) / dt).ceil() as usize;
+        for step in 1..=steps {
+            rows.push(Row {
+                t_s: t + step as f64 * dt,
+                position_m,
+                orientation,
+                segment,
+                wrench: [0.0; 6],
+            });
+        }
+        shift += steps as f64 * dt;
+    }
+    // Motions of segments the file does not list (never written by `skillc learn`) follow.
+    push_samples(&mut rows, &samples[next..], shift, usize::MAX);
+    rows
+}
+
+/// Appends preview samples `shift` seconds later; a motion's first sample, at the time (and
+/// the pose) the previous one ended, is left out so that time always increases, as in a
+/// demonstration.
+fn push_samples(rows: &mut Vec<Row>, samples: &[PreviewSample], shift: f64, segment: usize) {
+    for sample in samples {
+        let t_s = sample.t_s + shift;
+        if rows.last().is_some_and(|last| t_s <= last.t_s) {
+            continue;
+        }
+        rows.push(Row {
+            t_s,
+            position_m: sample.position_m,
+            orientation: sample.orientation,
+            segment,
+            wrench: [0.0; 6],
+        });
+    }
+}
+
+/// Writes each learned force over a segment into its segment's rows (as the wrench on the tool,
+/// the negative of the force the robot applies); returns the names of the forces with no
+/// segment (a point, a literal, none).
+fn place_forces(rows: &mut [Row], bound: &skill_runtime::exec::BoundSkill<'_>, dt: f64) -> Vec<String> {
+    use skill_ir::{Axis, ForceSource, FrameRef};
+    let mut unplaced = Vec::new();
+    for (decl, force) in bound.declared_forces() {
+        let (segment, along) = match &decl.source {
+            ForceSource::Constant { segment, along } | ForceSource::Magnitude { segment, along, .. } => {
+                (segment.index(), Some(along))
+            }
+            ForceSource::Dmp { segment, .. } => (segment.index(), None),
+            _ => {
+                unplaced.push(decl.name.clone());
+                continue;
+            }
+        };
+        let Some(first) = rows.iter().position(|r| r.segment == segment) else {
+            continue;
+        };
+        let t0 = rows[first].t_s;
+        let mut dmp = match force {
+            LearnedForce::Dmp { dmp } | LearnedForce::Magnitude { dmp } => Some((dmp, dmp.rollout())),
+            _ => None,
+        };
+        for (step, row) in rows[first..]
+            .iter_mut()
+            .take_while(|r| r.segment == segment)
+            .enumerate()
+        {
+            let applied: Vec<f64> = match &mut dmp {
+                Some((dmp, rollout)) => {
+                    if step > 0 {
+                        rollout.step(dmp, dt);
+                    }
+                    rollout.position().to_vec()
+                }
+                None => vec![force.value_n().unwrap_or(0.0)],
+            };
+            let (vector, moment) = match (along, applied.as_slice()) {
+                (None, [x, y, z]) => (nalgebra::Vector3::new(*x, *y, *z), false),
+                (Some(along), [value]) => {
+                    let rotation = match along.frame {
+                        FrameRef::Base => nalgebra::UnitQuaternion::identity(),
+                        FrameRef::Tool => row.orientation,
+                        FrameRef::Learned(id) => bound.frame(id).at(row.t_s - t0).rotation,
+                    };
+                    let (unit, moment) = match along.axis {
+                        Axis::X => (nalgebra::Vector3::x(), false),
+                        Axis::Y => (nalgebra::Vector3::y(), false),
+                        Axis::Z => (nalgebra::Vector3::z(), false),
+                        Axis::Rx => (nalgebra::Vector3::x(), true),
+                        Axis::Ry => (nalgebra::Vector3::y(), true),
+                        Axis::Rz => (nalgebra::Vector3::z(), true),
+                    };
+                    (rotation * unit * *value, moment)
+                }
+                _ => continue,
+            };
+            let columns = if moment { 3..6 } else { 0..3 };
+            for (column, value) in columns.zip(vector.iter()) {
+                row.wrench[column] -= value;
+            }
+        }
+    }
+    unplaced
 }

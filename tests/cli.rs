@@ -677,3 +677,83 @@ fn eval_runs_on_its_built_in_defaults_from_any_folder() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `rollout --template` writes the learned force profile on its segment (as the wrench on the
+/// tool, as demonstrations store it), holds the pose through a segment without a motion, keeps
+/// time increasing, and what it writes learns the same segments and force again; without the
+/// template the force columns are 0 and a note says why.
+#[test]
+fn rollout_with_its_template_writes_the_learned_forces_on_their_segments() {
+    let dir = temp_dir("rollout-forces");
+    let learned = dir.join("press.learned.json");
+    let learned = learned.to_str().expect("utf8");
+    let out = skillc(&[
+        "-q",
+        "learn",
+        "stdlib-skills/press.skill",
+        "examples/demos/press.csv",
+        "-o",
+        learned,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let value: serde_json::Value = serde_json::from_slice(&std::fs::read(learned).expect("learned")).expect("JSON");
+    let segment = |k: usize, key: &str| value["segments"][k][key].as_f64().expect("segment time");
+    let (press_start, press_end) = (segment(1, "start_s"), segment(1, "end_s"));
+
+    let out = skillc(&["rollout", learned]);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("--template"),
+        "the zeros are explained"
+    );
+    let out = skillc(&["rollout", learned, "--template", "stdlib-skills/press.skill"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = String::from_utf8_lossy(&out.stdout).into_owned();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|line| line.split(',').map(|f| f.parse().expect("number")).collect())
+        .collect();
+    let mut last_t = f64::NEG_INFINITY;
+    let mut peak_fz: f64 = 0.0;
+    for row in &rows {
+        assert!(row[0] > last_t, "time increases: {} after {last_t}", row[0]);
+        last_t = row[0];
+        let pushing = row[10].abs() > 1e-9;
+        if pushing {
+            assert!(
+                row[0] >= press_start - 0.01 && row[0] <= press_end + 0.01,
+                "a force at {} s, outside the press segment {press_start}..{press_end} s",
+                row[0]
+            );
+        }
+        peak_fz = peak_fz.max(row[10]);
+    }
+    assert!(
+        (last_t - segment(2, "end_s")).abs() < 0.02,
+        "the rollout lasts as the demonstration: {last_t} s"
+    );
+    // The button pushes back up on the tool: +z, about as hard as the demonstration pressed.
+    assert!((5.0..15.0).contains(&peak_fz), "peak fz {peak_fz} N");
+    let rollout = dir.join("press.rollout.csv");
+    std::fs::write(&rollout, &csv).expect("write");
+    let again = dir.join("again.json");
+    let out = skillc(&[
+        "-q",
+        "learn",
+        "stdlib-skills/press.skill",
+        rollout.to_str().expect("utf8"),
+        "-o",
+        again.to_str().expect("utf8"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let again: serde_json::Value = serde_json::from_slice(&std::fs::read(&again).expect("learned")).expect("JSON");
+    let again_start = again["segments"][1]["start_s"].as_f64().expect("segment");
+    assert!(
+        (again_start - press_start).abs() < 0.05,
+        "{again_start} against {press_start}"
+    );
+    // A template the file was not learned for is refused by name.
+    let out = skillc(&["rollout", learned, "--template", "stdlib-skills/touch.skill"]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

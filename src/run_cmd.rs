@@ -7,8 +7,10 @@ use skill_runtime::exec::{bind, simulate, simulate_task, BoundSkill, ExecOptions
 use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::atomic;
-use crate::load::{error_chain, learn_from_files, load_scene, load_skill, read_learned, Failure};
+use crate::load::{error_chain, learn_from_files, learn_from_source, load_scene, load_skill, read_learned, Failure};
+use crate::out::Verbosity;
 use crate::plot::{self, Plot, Subject, Trial};
+use skill_runtime::demo::Dialect;
 
 /// Arguments of `skillc run`.
 #[derive(Debug, Clone, clap::Args)]
@@ -28,6 +30,19 @@ pub struct RunArgs {
     /// its pose and wrench topics found by type).
     #[arg(long)]
     pub demo: Option<PathBuf>,
+    /// With --demo as a ROS 2 bag (MCAP): the `geometry_msgs/PoseStamped` topic with the flange
+    /// pose (default: the file's only one, else TF).
+    #[arg(long, value_name = "TOPIC", requires = "demo", conflicts_with_all = ["tf_parent", "tf_child"])]
+    pub pose_topic: Option<String>,
+    /// With --demo as a ROS 2 bag: the `geometry_msgs/WrenchStamped` topic (default: the only one).
+    #[arg(long, value_name = "TOPIC", requires = "demo")]
+    pub wrench_topic: Option<String>,
+    /// With --demo as a ROS 2 bag: read the pose from TF, the transform from this base frame.
+    #[arg(long, value_name = "FRAME", requires = "demo")]
+    pub tf_parent: Option<String>,
+    /// With --demo as a ROS 2 bag: read the pose from TF, the transform to this tool frame.
+    #[arg(long, value_name = "FRAME", requires = "demo")]
+    pub tf_child: Option<String>,
     /// The scene (TOML).
     #[arg(long)]
     pub scene: PathBuf,
@@ -76,20 +91,46 @@ pub fn parse_limit(text: &str) -> Result<(String, f64), String> {
     Ok((name.trim().to_string(), value))
 }
 
-/// Runs `skillc run`.
-pub fn run(args: &RunArgs) -> u8 {
+/// Runs `skillc run`. `--quiet` prints nothing but errors (a run that ends in failure is one);
+/// `--verbose` adds the wall-clock time.
+pub fn run(args: &RunArgs, verbosity: Verbosity) -> u8 {
+    let started = std::time::Instant::now();
     match run_inner(args) {
         Ok((report, text)) => {
-            if let Err(code) = crate::out::print_or_code(&text) {
+            verbosity.detail(format_args!(
+                "ran in {:.2} s (wall clock)",
+                started.elapsed().as_secs_f64()
+            ));
+            let failed = report.outcome == skill_ir::Outcome::Failure;
+            if verbosity.quiet() {
+                if failed {
+                    eprintln!("error: `{}` ended in failure: {}", args.file.display(), report.message);
+                }
+            } else if let Err(code) = crate::out::print_or_code(&text) {
                 return code;
             }
-            match report.outcome {
-                skill_ir::Outcome::Success => 0,
-                skill_ir::Outcome::Failure => 1,
-            }
+            u8::from(failed)
         }
         Err(failure) => failure.report(),
     }
+}
+
+/// The bag topics the flags name (`--pose-topic` ...), refused for a CSV demonstration.
+fn bag_options(args: &RunArgs) -> Result<crate::ros::BagOptions, Failure> {
+    let bag = crate::ros::BagOptions {
+        pose_topic: args.pose_topic.clone(),
+        wrench_topic: args.wrench_topic.clone(),
+        tf_parent: args.tf_parent.clone(),
+        tf_child: args.tf_child.clone(),
+    };
+    let is_bag = args.demo.as_deref().is_some_and(crate::ros::is_mcap);
+    if bag != crate::ros::BagOptions::default() && !is_bag {
+        return Err(Failure::Usage(
+            "--pose-topic, --wrench-topic, --tf-parent and --tf-child are for a --demo that is a ROS 2 bag (`.mcap`)"
+                .into(),
+        ));
+    }
+    Ok(bag)
 }
 
 fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
@@ -118,7 +159,17 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     let (_, skill) = load_skill(&args.file, args.skill.as_deref())?;
     let learned = match (&args.learned, &args.demo) {
         (Some(path), _) => read_learned(path)?,
-        (None, Some(demo)) => learn_from_files(&skill, demo, &LearnOptions::default())?,
+        (None, Some(demo)) => {
+            learn_from_source(
+                &skill,
+                demo,
+                &Dialect::default(),
+                &bag_options(args)?,
+                &LearnOptions::default(),
+                false,
+            )?
+            .0
+        }
         (None, None) => {
             return Err(Failure::Usage(
                 "give the learned file (--learned L.json) or a demonstration (--demo D.csv)".into(),

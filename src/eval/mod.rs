@@ -17,6 +17,7 @@ use skill_runtime::exec::{bind, simulate, BoundSkill, ExecOptions, Mode, RunLog}
 use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::load::{error_chain, learn_from_files, load_scene, load_skill, Failure};
+use crate::out::Verbosity;
 use crate::plot;
 use crate::profile::DesiredProfile;
 use metrics::{ContactPlan, Metrics};
@@ -263,15 +264,16 @@ impl Outcome {
     }
 }
 
-/// Runs `skillc eval`.
-pub fn run(args: &EvalArgs) -> u8 {
+/// Runs `skillc eval`. `--quiet` prints no tables, progress or report path, only errors and
+/// the trials that failed; `--verbose` adds the time of each stage.
+pub fn run(args: &EvalArgs, verbosity: Verbosity) -> u8 {
     let result = match &args.command {
         Some(EvalCommand::Merge {
             out,
             min_success,
             summaries,
-        }) => merge(out, *min_success, summaries),
-        None => evaluate(args),
+        }) => merge(out, *min_success, summaries, verbosity),
+        None => evaluate(args, verbosity),
     };
     match result {
         Ok(code) => code,
@@ -493,36 +495,79 @@ fn replay_frame_z(bound: &BoundSkill<'_>, plan: &ContactPlan, t: f64) -> nalgebr
     }
 }
 
-fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
+/// What a sweep runs with: the worker threads, the progress bar, the start and how much to say.
+struct Runner<'a> {
+    pool: &'a rayon::ThreadPool,
+    progress: &'a indicatif::ProgressBar,
+    started: Instant,
+    verbosity: Verbosity,
+}
+
+/// Prints `text` to standard output unless `--quiet`.
+fn say(verbosity: Verbosity, text: &str) -> Result<(), Failure> {
+    if verbosity.quiet() {
+        Ok(())
+    } else {
+        crate::out::print(text)
+    }
+}
+
+/// The demonstrations `eval --real DIR` would learn from: the folder's `*.csv` files but the
+/// labels and index; none is a usage error found before any trial runs.
+fn check_real_dir(dir: &Path) -> Result<(), Failure> {
+    let entries = std::fs::read_dir(dir)
+        .map_err(|err| Failure::Usage(format!("--real: cannot read the folder `{}`: {err}", dir.display())))?;
+    let demos = entries
+        .filter_map(Result::ok)
+        .map(|entry| entry.path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "csv"))
+        .filter(|path| {
+            !matches!(
+                path.file_name().and_then(|name| name.to_str()),
+                Some("segment_labels.csv" | "index.csv")
+            )
+        })
+        .count();
+    if demos == 0 {
+        return Err(Failure::Usage(format!(
+            "--real: `{}` holds no demonstration (`*.csv` besides segment_labels.csv and index.csv)",
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
+fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     let started = Instant::now();
+    if let Some(dir) = &args.real {
+        check_real_dir(dir)?;
+    }
     let (trials, base_dir) = load_trials(args)?;
+    let names: Vec<String> = trials.skills.iter().map(skill_stem).collect();
+    if let Some(unknown) = args.skills.iter().find(|name| !names.contains(name)) {
+        return Err(Failure::Usage(format!(
+            "--skill `{unknown}`: the trials have no such skill; they have {}",
+            names.join(", ")
+        )));
+    }
     let selected: Vec<SkillTrials> = trials
         .skills
         .into_iter()
-        .filter(|spec| {
-            args.skills.is_empty() || {
-                let stem = spec.name.clone().unwrap_or_else(|| {
-                    spec.file
-                        .file_stem()
-                        .map(|s| s.to_string_lossy().into_owned())
-                        .unwrap_or_default()
-                });
-                args.skills.contains(&stem)
-            }
-        })
+        .filter(|spec| args.skills.is_empty() || args.skills.contains(&skill_stem(spec)))
         .collect();
     if selected.is_empty() {
-        return Err(Failure::Usage(format!(
-            "no skill selected; the trials have {}",
-            "none matching --skill"
-        )));
+        return Err(Failure::Usage("the trials file lists no skill".into()));
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .map_err(|err| Failure::Usage(format!("cannot start worker threads: {err}")))?;
 
-    let progress = indicatif::ProgressBar::new(0);
+    let progress = if verbosity.quiet() {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(0)
+    };
     progress.set_style(
         indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -541,8 +586,19 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
         prep.swap.clone_from(&swap);
     }
     let bound: Vec<Bound<'_>> = prepared.iter().map(bind_prepared).collect();
+    verbosity.detail(format_args!(
+        "learned {} skill(s) in {:.1} s",
+        prepared.len(),
+        started.elapsed().as_secs_f64()
+    ));
     if let Some(draws) = args.sweep {
-        return run_sweep(args, draws, &prepared, &bound, &pool, &progress, started);
+        let runner = Runner {
+            pool: &pool,
+            progress: &progress,
+            started,
+            verbosity,
+        };
+        return run_sweep(args, draws, &prepared, &bound, runner);
     }
     let mut jobs = Vec::new();
     for (skill, prep) in prepared.iter().enumerate() {
@@ -584,12 +640,18 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
 
     let table = report::table(&outcomes);
     if let Some(swap) = &swap {
-        crate::out::print(&format!(
-            "robot: {} ({}), its tool starting where each scene's robot starts its tool\n",
-            swap.robot.name, swap.robot.title
-        ))?;
+        say(
+            verbosity,
+            &format!(
+                "robot: {} ({}), its tool starting where each scene's robot starts its tool\n",
+                swap.robot.name, swap.robot.title
+            ),
+        )?;
     }
-    crate::out::print(&format!("{table}{} trials in {elapsed:.1} s\n", outcomes.len()))?;
+    say(
+        verbosity,
+        &format!("{table}{} trials in {elapsed:.1} s\n", outcomes.len()),
+    )?;
     let real = match &args.real {
         Some(dir) => {
             let root = crate::defaults::root().map_err(Failure::Usage)?;
@@ -598,7 +660,7 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
             let results = pool
                 .install(|| real::evaluate(dir, &wipe, &table))
                 .map_err(Failure::Usage)?;
-            crate::out::print(&report::real_table(&results))?;
+            say(verbosity, &report::real_table(&results))?;
             results
         }
         None => Vec::new(),
@@ -612,7 +674,7 @@ fn evaluate(args: &EvalArgs) -> Result<u8, Failure> {
         &real,
     )
     .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
-    crate::out::print(&format!("report: {}\n", written.display()))?;
+    say(verbosity, &format!("report: {}\n", written.display()))?;
     // A gate for CI: any skill trial that failed its criteria (or could not run) fails the eval.
     let failed: Vec<&TrialResult> = outcomes
         .iter()
@@ -718,10 +780,14 @@ fn run_sweep(
     draws: usize,
     prepared: &[Prepared],
     bound: &[Bound<'_>],
-    pool: &rayon::ThreadPool,
-    progress: &indicatif::ProgressBar,
-    started: Instant,
+    runner: Runner<'_>,
 ) -> Result<u8, Failure> {
+    let Runner {
+        pool,
+        progress,
+        started,
+        verbosity,
+    } = runner;
     let partition = args.partition.unwrap_or(sweep::Partition::ALL);
     let bases: Vec<SweepBase> = prepared.iter().map(sweep_base).collect();
     let jobs: Vec<DrawJob> = (0..prepared.len())
@@ -758,21 +824,25 @@ fn run_sweep(
         elapsed_s: started.elapsed().as_secs_f64(),
         trials: outcomes.into_iter().map(|o| o.result).collect(),
     };
-    finish_sweep(&args.out, &summary, args.min_success)
+    finish_sweep(&args.out, &summary, args.min_success, verbosity)
 }
 
 /// Prints and writes a sweep's (or merged sweeps') report; exit 1 when a skill's success rate is
 /// below `min_success`.
-fn finish_sweep(out: &Path, summary: &sweep::SweepSummary, min_success: f64) -> Result<u8, Failure> {
+fn finish_sweep(
+    out: &Path,
+    summary: &sweep::SweepSummary,
+    min_success: f64,
+    verbosity: Verbosity,
+) -> Result<u8, Failure> {
     let text = sweep::table(summary);
-    crate::out::print(&format!(
-        "{text}{} trials in {:.1} s\n",
-        summary.trials.len(),
-        summary.elapsed_s
-    ))?;
+    say(
+        verbosity,
+        &format!("{text}{} trials in {:.1} s\n", summary.trials.len(), summary.elapsed_s),
+    )?;
     let written = sweep::write(out, summary, &text)
         .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", out.display())))?;
-    crate::out::print(&format!("report: {}\n", written.display()))?;
+    say(verbosity, &format!("report: {}\n", written.display()))?;
     let low: Vec<(String, f64)> = sweep::rates(&summary.trials)
         .into_iter()
         .filter(|(_, rate)| *rate < min_success)
@@ -788,7 +858,7 @@ fn finish_sweep(out: &Path, summary: &sweep::SweepSummary, min_success: f64) -> 
 }
 
 /// `skillc eval merge`.
-fn merge(out: &Path, min_success: f64, summaries: &[PathBuf]) -> Result<u8, Failure> {
+fn merge(out: &Path, min_success: f64, summaries: &[PathBuf], verbosity: Verbosity) -> Result<u8, Failure> {
     let mut parts = Vec::new();
     for path in summaries {
         let text = std::fs::read_to_string(path)
@@ -804,5 +874,15 @@ fn merge(out: &Path, min_success: f64, summaries: &[PathBuf]) -> Result<u8, Fail
     let inputs: Vec<&Path> = summaries.iter().map(PathBuf::as_path).collect();
     crate::atomic::refuse_inputs(&out.join("summary.json"), "--out", &inputs).map_err(Failure::Usage)?;
     let merged = sweep::merge(parts).map_err(Failure::Input)?;
-    finish_sweep(out, &merged, min_success)
+    finish_sweep(out, &merged, min_success, verbosity)
+}
+
+/// The name `--skill` selects a skill's trials by: its `name`, else its file's stem.
+fn skill_stem(spec: &SkillTrials) -> String {
+    spec.name.clone().unwrap_or_else(|| {
+        spec.file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    })
 }

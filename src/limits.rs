@@ -19,6 +19,11 @@ pub const DEMO_S: f64 = skill_runtime::skill::validate::MAX_TAU_S;
 pub const SAMPLES: f64 = 2e6;
 /// Most segments a template may expect.
 pub const SEGMENTS: u32 = 1000;
+/// Largest force component a demonstration may hold \[N\] (industrial F/T sensors read up to a
+/// few kN).
+pub const DEMO_FORCE_N: f64 = 1e5;
+/// Largest moment component a demonstration may hold \[N m\].
+pub const DEMO_MOMENT_NM: f64 = 1e4;
 
 /// `value` (named `name` in the message) within `[min, max]`.
 pub fn check(name: &str, value: f64, (min, max): (f64, f64), unit: &str) -> Result<f64, String> {
@@ -35,7 +40,7 @@ pub fn check(name: &str, value: f64, (min, max): (f64, f64), unit: &str) -> Resu
 }
 
 /// `value` as people read it: plain for ordinary magnitudes, in exponent form otherwise.
-fn number(value: f64) -> String {
+pub fn number(value: f64) -> String {
     if value != 0.0 && !(1e-3..1e6).contains(&value.abs()) {
         format!("{value:e}")
     } else {

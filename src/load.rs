@@ -211,6 +211,7 @@ pub fn learn_from_source(
     }
     let (loaded, notes, provenance) = read_demo(demo_path, dialect, bag)?;
     let file = demo_path.display();
+    check_wrench_magnitudes(&loaded.demo, &file.to_string())?;
     let samples = loaded.demo.len();
     let needed = (plan.segments as usize * 5).max(10);
     if samples < needed {
@@ -220,6 +221,18 @@ pub fn learn_from_source(
         )));
     }
     let duration = loaded.demo.duration_s();
+    let min_length = match &plan.segmentation {
+        skill_ir::Segmentation::Cluster { min_length_s, .. }
+        | skill_ir::Segmentation::Changepoint { min_length_s, .. } => Some(*min_length_s),
+        _ => None,
+    };
+    if let Some(min_length) = min_length.filter(|m| *m * f64::from(plan.segments) > duration) {
+        return Err(Failure::Input(format!(
+            "skill `{name}` expects {} segment(s) of at least {} s each (`min_length`), longer than `{file}` ({duration:.2} s) in all",
+            plan.segments,
+            limits::number(min_length)
+        )));
+    }
     if duration > limits::DEMO_S {
         return Err(Failure::Input(format!(
             "`{file}` lasts {duration:e} s, at most {} s are supported: is its `t` column in seconds?",
@@ -258,6 +271,31 @@ pub fn learn_from_source(
         ))
     })?;
     Ok((learned, provenance))
+}
+
+/// Refuses a demonstration whose force or moment components lie beyond any sensor's range
+/// ([`limits::DEMO_FORCE_N`], [`limits::DEMO_MOMENT_NM`]), naming the first such sample: learning
+/// would square them into infinities and report those instead.
+fn check_wrench_magnitudes(demo: &skill_runtime::demo::Demo, file: &str) -> Result<(), Failure> {
+    let channels = [
+        (&demo.force_n, ["fx", "fy", "fz"], limits::DEMO_FORCE_N, "N"),
+        (&demo.torque_nm, ["mx", "my", "mz"], limits::DEMO_MOMENT_NM, "N m"),
+    ];
+    for (values, names, bound, unit) in channels {
+        for (index, value) in values.iter().enumerate() {
+            if let Some(axis) = (0..3).find(|&axis| value[axis].abs() > bound) {
+                let t = demo.t_s.get(index).copied().unwrap_or(f64::NAN);
+                return Err(Failure::Input(format!(
+                    "`{file}`, sample {} (t = {t} s): {} is {:e} {unit}, beyond any force sensor (at most {bound:e} {unit}): is the column in {}?",
+                    index + 1,
+                    names[axis],
+                    value[axis],
+                    if unit == "N" { "newtons" } else { "newton metres" }
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Learned files larger than this are refused before reading, in bytes.

@@ -71,7 +71,7 @@ pub fn root() -> Result<PathBuf, String> {
         return Ok(PathBuf::new());
     }
     let dir = cache_dir();
-    if dir.join(COMPLETE).is_file() && FILES.iter().all(|(path, text)| same(&dir.join(path), text)) {
+    if FILES.iter().all(|(path, text)| same(&dir.join(path), text)) && demos_as_marked(&dir) {
         return Ok(dir);
     }
     write_all(&dir).map_err(|err| format!("cannot write the built-in defaults to `{}`: {err}", dir.display()))?;
@@ -101,9 +101,41 @@ fn same(path: &Path, text: &str) -> bool {
     std::fs::read_to_string(path).is_ok_and(|existing| existing == text)
 }
 
+/// A 64-bit FNV-1a hash of `bytes`, in hex.
+fn fnv(bytes: &[u8]) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for byte in bytes {
+        hash ^= u64::from(*byte);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{hash:016x}")
+}
+
+/// The completion mark's text: one line `PATH HASH` per generated demonstration.
+fn mark(demos: &[(String, Vec<u8>)]) -> String {
+    demos
+        .iter()
+        .map(|(path, bytes)| format!("{path} {}\n", fnv(bytes)))
+        .collect()
+}
+
+/// Whether the completion mark exists and every generated demonstration it lists still has the
+/// bytes it had when written (a user's edit, a truncated or deleted file are regenerated; the
+/// demonstrations are 5 MB, hashed in milliseconds).
+fn demos_as_marked(dir: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(dir.join(COMPLETE)) else {
+        return false;
+    };
+    let lines: Vec<(&str, &str)> = text.lines().filter_map(|line| line.split_once(' ')).collect();
+    lines.len() == StdSkill::ALL.len()
+        && lines
+            .iter()
+            .all(|(path, hash)| std::fs::read(dir.join(path)).is_ok_and(|bytes| fnv(&bytes) == *hash))
+}
+
 /// Writes every built-in file and the generated demonstrations into `dir`, each atomically,
-/// then the completion mark: a folder another process is writing at the same time ends with
-/// the same bytes.
+/// then the completion mark with the demonstrations' hashes: a folder another process is
+/// writing at the same time ends with the same bytes.
 fn write_all(dir: &Path) -> std::io::Result<()> {
     for (path, text) in FILES {
         let target = dir.join(path);
@@ -112,13 +144,15 @@ fn write_all(dir: &Path) -> std::io::Result<()> {
         }
         atomic::write(&target, text.as_bytes())?;
     }
-    let demos = dir.join("examples/demos");
-    std::fs::create_dir_all(&demos)?;
+    std::fs::create_dir_all(dir.join("examples/demos"))?;
+    let mut written = Vec::new();
     for skill in StdSkill::ALL {
-        let demo = generate(skill, skill.default_seed());
-        atomic::write(&demos.join(format!("{}.csv", skill.name())), to_csv(&demo).as_bytes())?;
+        let path = format!("examples/demos/{}.csv", skill.name());
+        let bytes = to_csv(&generate(skill, skill.default_seed())).into_bytes();
+        atomic::write(&dir.join(&path), &bytes)?;
+        written.push((path, bytes));
     }
-    atomic::write(&dir.join(COMPLETE), b"")
+    atomic::write(&dir.join(COMPLETE), mark(&written).as_bytes())
 }
 
 #[cfg(test)]
@@ -169,7 +203,15 @@ mod tests {
     fn written_defaults_are_complete_and_match_the_repository() {
         let dir = std::env::temp_dir().join(format!("skillc-defaults-test-{}", std::process::id()));
         write_all(&dir).expect("writes");
-        assert!(dir.join(COMPLETE).is_file());
+        assert!(demos_as_marked(&dir));
+        // An edited demonstration is noticed (and `root` would write the folder again).
+        let press = dir.join("examples/demos/press.csv");
+        let mut edited = std::fs::read(&press).expect("demo");
+        edited.truncate(edited.len() / 2);
+        std::fs::write(&press, edited).expect("edit");
+        assert!(!demos_as_marked(&dir));
+        write_all(&dir).expect("writes again");
+        assert!(demos_as_marked(&dir));
         for (path, text) in FILES {
             assert!(same(&dir.join(path), text), "{path}");
             assert_eq!(std::fs::read_to_string(path).expect("repository file"), *text, "{path}");

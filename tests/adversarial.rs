@@ -361,6 +361,10 @@ fn malformed_learned_files_are_refused_by_rollout_and_run() {
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
+fn strokes(v: &mut serde_json::Value) -> &mut Vec<serde_json::Value> {
+    v["motions"]["strokes"]["strokes"].as_array_mut().expect("strokes")
+}
+
 fn first_position(v: &mut serde_json::Value) -> &mut serde_json::Value {
     let motions = v["motions"].as_object_mut().expect("motions");
     &mut motions.values_mut().next().expect("a motion")["position"]
@@ -669,4 +673,249 @@ fn primary_output_goes_through_one_writer() {
             "`{name}` prints with print!/println!, which panic on a closed or full stdout: use skillc::out::print"
         );
     }
+}
+
+/// Copies the standard wipe and its demonstration into the workspace.
+fn with_wipe(dir: &Path) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (from, to) in [
+        ("stdlib-skills/wipe.skill", "in/wipe.skill"),
+        ("examples/demos/wipe.csv", "in/wipe.csv"),
+    ] {
+        std::fs::copy(root.join(from), dir.join(to)).expect("copy");
+    }
+}
+
+/// `repeat`, `strokes(...)` and the displacement and magnitude guards with absurd values: the
+/// template is refused by name and line, or learns what it says; a learned strokes motion with
+/// too many strokes, an empty basis or an absurd duration is refused by rollout and run.
+#[test]
+fn repetition_and_strokes_with_absurd_values_are_refused_or_learn() {
+    let dir = workspace("strokes");
+    with_wipe(&dir);
+    let before = snapshot(&dir);
+    for (skill, needle) in [
+        ("repeat_zero", "repeat count"),
+        ("repeat_huge", "repeat count"),
+        ("strokes_segment_99", "segment 99"),
+        ("strokes_min_length_0", "stroke length"),
+        ("strokes_basis_huge", "basis functions"),
+        ("cluster_min_length_1e300", "min_length"),
+    ] {
+        let file = format!("in/{skill}.skill");
+        let ran = expect(
+            &dir,
+            &["learn", &file, "in/wipe.csv", "-o", "out.json"],
+            Stdout::Pipe,
+            1,
+        );
+        assert!(
+            ran.stderr.contains(needle) && (ran.stderr.contains(skill) || ran.stderr.contains("skill `wipe`")),
+            "{skill}: {}",
+            ran.stderr
+        );
+        assert!(!ran.stderr.contains("18446744073709551"), "{skill}: {}", ran.stderr);
+        assert!(!dir.join("out.json").exists(), "{skill}: nothing is written");
+        expect(
+            &dir,
+            &["check", &file],
+            Stdout::Pipe,
+            u8::from(skill != "cluster_min_length_1e300").into(),
+        );
+    }
+    // One stroke no shorter than 1e300 s is the whole segment; guards that cannot fire compile.
+    for skill in ["strokes_min_length_1e300", "guards_1e300"] {
+        let file = format!("in/{skill}.skill");
+        let out = format!("{skill}.json");
+        expect(
+            &dir,
+            &["-q", "learn", &file, "in/wipe.csv", "-o", &out],
+            Stdout::Pipe,
+            0,
+        );
+    }
+    let learned: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("strokes_min_length_1e300.json")).expect("learned"))
+            .expect("JSON");
+    assert_eq!(
+        learned["motions"]["strokes"]["strokes"].as_array().map(Vec::len),
+        Some(1)
+    );
+
+    // Learned strokes: too many, an empty basis, an absurd duration.
+    expect(
+        &dir,
+        &[
+            "-q",
+            "learn",
+            "in/wipe.skill",
+            "in/wipe.csv",
+            "-o",
+            "in/wipe.learned.json",
+        ],
+        Stdout::Pipe,
+        0,
+    );
+    let good: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("in/wipe.learned.json")).expect("learned")).expect("JSON");
+    type Change = fn(&mut Vec<serde_json::Value>);
+    let cases: [(&str, Change, &str); 3] = [
+        (
+            "strokes_10001",
+            |s| {
+                // Small strokes (two basis functions), so that the file stays small.
+                let mut small = s[0].clone();
+                for part in ["position", "orientation"] {
+                    small[part]["basis"]["centers"] = serde_json::json!([0.9, 0.1]);
+                    small[part]["basis"]["widths"] = serde_json::json!([1.0, 1.0]);
+                    small[part]["weights"] = serde_json::json!([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]);
+                    small[part]["config"]["n_basis"] = 2.into();
+                }
+                *s = vec![small; 10_001];
+            },
+            "strokes",
+        ),
+        (
+            "stroke_empty_basis",
+            |s| {
+                let p = &mut s[1]["position"];
+                p["basis"]["centers"] = serde_json::json!([]);
+                p["basis"]["widths"] = serde_json::json!([]);
+                p["weights"] = serde_json::json!([[], [], []]);
+            },
+            "basis",
+        ),
+        ("stroke_tau_1e12", |s| s[2]["position"]["tau_s"] = 1e12.into(), "tau_s"),
+    ];
+    for (name, change, needle) in cases {
+        let mut value = good.clone();
+        change(strokes(&mut value));
+        let file = format!("in/{name}.json");
+        std::fs::write(dir.join(&file), value.to_string()).expect("write");
+        let ran = expect(&dir, &["rollout", &file, "-o", "out.csv"], Stdout::Pipe, 1);
+        assert!(
+            ran.stderr.contains(&file) && ran.stderr.contains(needle),
+            "{name}: {}",
+            ran.stderr
+        );
+        expect(
+            &dir,
+            &["run", "in/wipe.skill", "--learned", &file, "--scene", "in/table.toml"],
+            Stdout::Pipe,
+            1,
+        );
+        assert!(!dir.join("out.csv").exists());
+    }
+    assert_unchanged(&before, &dir);
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+/// A force of 1e300 N is refused by sample and column, not reported as an infinite peak.
+#[test]
+fn a_force_beyond_any_sensor_is_named_by_sample_and_column() {
+    let dir = workspace("force");
+    let demo = std::fs::read_to_string(dir.join("in/touch.csv")).expect("demo");
+    let mut text = String::new();
+    let mut data_rows = 0;
+    for line in demo.lines() {
+        if line.starts_with('#') || line.starts_with('t') {
+            text.push_str(line);
+        } else {
+            data_rows += 1;
+            let mut fields: Vec<&str> = line.split(',').collect();
+            if data_rows == 3000 {
+                fields[10] = "1e300";
+            }
+            text.push_str(&fields.join(","));
+        }
+        text.push('\n');
+    }
+    std::fs::write(dir.join("in/force_1e300.csv"), text).expect("write");
+    let ran = expect(
+        &dir,
+        &["learn", "in/touch.skill", "in/force_1e300.csv", "-o", "out.json"],
+        Stdout::Pipe,
+        1,
+    );
+    assert!(
+        ran.stderr.contains("in/force_1e300.csv") && ran.stderr.contains("sample 3000") && ran.stderr.contains("fz"),
+        "{}",
+        ran.stderr
+    );
+    assert!(!ran.stderr.contains("inf N"), "{}", ran.stderr);
+    assert!(!dir.join("out.json").exists());
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+/// `eval --real` on a folder without demonstrations and `eval --skill` naming no skill are usage
+/// errors found before any trial runs, naming the folder or the name; `--quiet` silences `run`
+/// and `eval` but for errors, a failed run among them.
+#[test]
+fn eval_refuses_what_it_cannot_run_and_quiet_reaches_run_and_eval() {
+    let dir = workspace("eval");
+    std::fs::create_dir_all(dir.join("empty")).expect("dir");
+    std::fs::write(dir.join("empty/segment_labels.csv"), "file,start,end,label\n").expect("labels");
+    let ran = expect(&dir, &["eval", "--real", "empty", "--out", "report"], Stdout::Pipe, 2);
+    assert!(
+        ran.stderr.contains("`empty`") && ran.stderr.contains("no demonstration"),
+        "{}",
+        ran.stderr
+    );
+    expect(&dir, &["eval", "--real", "nosuch", "--out", "report"], Stdout::Pipe, 2);
+    let ran = expect(&dir, &["eval", "--skill", "nosuch", "--out", "report"], Stdout::Pipe, 2);
+    assert!(
+        ran.stderr.contains("`nosuch`") && ran.stderr.contains("touch"),
+        "{}",
+        ran.stderr
+    );
+    assert!(!dir.join("report").exists());
+
+    learned(&dir);
+    let run = [
+        "run",
+        "in/touch.skill",
+        "--learned",
+        "in/touch.learned.json",
+        "--scene",
+        "in/table.toml",
+    ];
+    let ran = expect(&dir, &[&["-q"][..], &run].concat(), Stdout::Pipe, 0);
+    assert!(
+        ran.stdout.is_empty() && ran.stderr.is_empty(),
+        "{}{}",
+        ran.stdout,
+        ran.stderr
+    );
+    // The table 30 cm lower is never reached: the failure is the one thing said.
+    let ran = expect(
+        &dir,
+        &[&["-q"][..], &run, &["--set", "table.z=0.0"]].concat(),
+        Stdout::Pipe,
+        1,
+    );
+    assert!(
+        ran.stdout.is_empty() && ran.stderr.contains("ended in failure"),
+        "{}",
+        ran.stderr
+    );
+    let ran = expect(&dir, &[&["-v"][..], &run].concat(), Stdout::Pipe, 0);
+    assert!(
+        ran.stderr.contains("wall clock") && ran.stdout.contains("success"),
+        "{}",
+        ran.stderr
+    );
+    let ran = expect(
+        &dir,
+        &["-q", "eval", "--skill", "touch", "--no-replay", "--out", "report"],
+        Stdout::Pipe,
+        0,
+    );
+    assert!(
+        ran.stdout.is_empty() && ran.stderr.is_empty(),
+        "{}{}",
+        ran.stdout,
+        ran.stderr
+    );
+    assert!(dir.join("report/summary.json").is_file());
+    std::fs::remove_dir_all(&dir).expect("clean up");
 }

@@ -379,19 +379,30 @@ impl Checker<'_> {
 
     /// `repeat N`: a whole number from 1 to [`MAX_REPEAT`].
     fn repeat_count(&mut self, count: &ast::Expr) -> Option<u32> {
-        let n = self.count(count, "the repeat count")?;
-        if n > MAX_REPEAT {
-            let diag = self
-                .diag(
-                    Code::OutOfRange,
-                    count.span,
-                    format!("a state repeats its motion at most {MAX_REPEAT} times"),
-                    "too many",
-                )
-                .help("split the work into several task steps, or repeat fewer times");
-            self.report(diag);
-            return None;
-        }
+        // A whole number out of range (0, or more than fits) gets the same message as one above
+        // the maximum: the bounds are 1 and MAX_REPEAT, whatever `count` allows.
+        let whole = match &count.kind {
+            ExprKind::Number(number) if !number.text.contains(['.', 'e', 'E', '-']) => {
+                Some(number.text.parse::<u64>().unwrap_or(u64::MAX))
+            }
+            _ => None,
+        };
+        let n = match whole {
+            Some(n) if (1..=u64::from(MAX_REPEAT)).contains(&n) => n as u32,
+            Some(_) => {
+                let diag = self
+                    .diag(
+                        Code::OutOfRange,
+                        count.span,
+                        format!("the repeat count must be between 1 and {MAX_REPEAT}"),
+                        "out of range",
+                    )
+                    .help("split the work into several task steps, or repeat fewer times; `repeat 1` runs the motion once");
+                self.report(diag);
+                return None;
+            }
+            None => self.count(count, "the repeat count")?,
+        };
         Some(n)
     }
 

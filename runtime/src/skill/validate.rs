@@ -145,10 +145,19 @@ impl Learned {
             }
             for (index, stroke) in motion.strokes.iter().enumerate() {
                 let field = format!("{field}.strokes[{index}]");
-                if !stroke.strokes.is_empty() || stroke.segment != motion.segment {
+                if !stroke.strokes.is_empty() {
                     return Err(bad(
-                        field,
-                        "a stroke has no strokes of its own and lies in its motion's segment".to_string(),
+                        format!("{field}.strokes"),
+                        "is not empty: a stroke is not cut into strokes again".to_string(),
+                    ));
+                }
+                if stroke.segment != motion.segment {
+                    return Err(bad(
+                        format!("{field}.segment"),
+                        format!(
+                            "is {}, its motion's segment is {}: a stroke lies in its motion's segment",
+                            stroke.segment, motion.segment
+                        ),
                     ));
                 }
                 dmp_ok(&format!("{field}.position"), &stroke.position, Some(3))?;
@@ -370,6 +379,26 @@ mod tests {
         file.learned_version = 99;
         let err = file.validate().expect_err("version 99").to_string();
         assert!(err.contains("99") && err.contains("learn it again"), "{err}");
+    }
+
+    #[test]
+    fn strokes_are_checked_like_motions_and_stay_in_their_segment() {
+        let mut file = learned();
+        let mut stroke = motion(&mut file).clone();
+        stroke.strokes.clear();
+        motion(&mut file).strokes = vec![stroke.clone(), stroke.clone()];
+        file.validate().expect("two strokes in the motion's segment");
+        motion(&mut file).strokes[1].segment = 1;
+        let err = file.validate().expect_err("a stroke elsewhere").to_string();
+        assert!(err.contains("motions.approach.strokes[1].segment"), "{err}");
+        motion(&mut file).strokes[1].segment = 0;
+        motion(&mut file).strokes[0].position.tau_s = 1e12;
+        let err = file.validate().expect_err("a stroke of 1e12 s").to_string();
+        assert!(err.contains("motions.approach.strokes[0].position.tau_s"), "{err}");
+        motion(&mut file).strokes[0] = stroke.clone();
+        motion(&mut file).strokes[0].strokes = vec![stroke];
+        let err = file.validate().expect_err("strokes of a stroke").to_string();
+        assert!(err.contains("motions.approach.strokes[0].strokes"), "{err}");
     }
 
     #[test]

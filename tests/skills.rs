@@ -306,35 +306,16 @@ fn a_tool_starting_inside_an_object_is_refused_with_the_object_named() {
 /// has come back 2 cm), as times \[s\].
 fn reversals(log: &RunLog, state: &str) -> Vec<f64> {
     let index = log.states.iter().position(|s| s == state).expect("the state ran") as u32;
-    let path: Vec<(f64, f64)> = log
+    let (t, x): (Vec<f64>, Vec<f64>) = log
         .ticks
         .iter()
         .filter(|tick| tick.state == index)
         .map(|tick| (tick.t_s, tick.measured[0]))
-        .collect();
-    let (mut high, mut low, mut heading, mut turns) = (0, 0, 0, Vec::new());
-    for k in 1..path.len() {
-        if path[k].1 > path[high].1 {
-            high = k;
-        }
-        if path[k].1 < path[low].1 {
-            low = k;
-        }
-        if heading >= 0 && path[high].1 - path[k].1 > 0.02 {
-            if heading == 1 {
-                turns.push(path[high].0);
-            }
-            heading = -1;
-            low = k;
-        } else if heading <= 0 && path[k].1 - path[low].1 > 0.02 {
-            if heading == -1 {
-                turns.push(path[low].0);
-            }
-            heading = 1;
-            high = k;
-        }
-    }
-    turns
+        .unzip();
+    skill_runtime::learn::strokes::turning_points(&x, 0.02)
+        .into_iter()
+        .map(|k| t[k])
+        .collect()
 }
 
 #[test]

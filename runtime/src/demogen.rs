@@ -333,8 +333,7 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                     let progress = min_jerk(warp(s, w2));
                     let lateral = Vector3::new(0.0, 0.02 * (PI * progress).sin(), 0.0);
                     let position = c1 + (c2 - c1) * progress + lateral;
-                    let mut force = touch_down_lift_off(local, contact_s, f0);
-                    force *= 1.0 + 0.04 * (2.0 * PI * 0.7 * t + slow_phase).sin();
+                    let force = pressing(local, contact_s, f0, t, slow_phase);
                     TipState {
                         position,
                         normal: up,
@@ -393,8 +392,7 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                         begin += duration;
                     }
                     let position = c1 + (c2 - c1) * along + side * bow;
-                    let mut force = touch_down_lift_off(local, contact_s, f0);
-                    force *= 1.0 + 0.04 * (2.0 * PI * 0.7 * t + slow_phase).sin();
+                    let force = pressing(local, contact_s, f0, t, slow_phase);
                     TipState {
                         position,
                         normal: up,
@@ -633,6 +631,12 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             turns_s,
         },
     }
+}
+
+/// The normal force of a person pressing steadily at `level` over a contact phase of length
+/// `total` ([`touch_down_lift_off`]), varying by ±4 % at 0.7 Hz (at `t`, with `phase`).
+fn pressing(local: f64, total: f64, level: f64, t: f64, phase: f64) -> f64 {
+    touch_down_lift_off(local, total, level) * (1.0 + 0.04 * (2.0 * PI * 0.7 * t + phase).sin())
 }
 
 /// The normal force profile of a contact phase of length `total`: a touch-down overshoot of

@@ -43,11 +43,17 @@ pub fn find_strokes(t_s: &[f64], positions: &[Vector3<f64>], min_length_s: f64) 
     }
     let mut turns = turning_points(&s, REVERSAL_SHARE * range);
     merge_short(&mut turns, t_s, n, min_length_s);
+    bounds(&turns, n).windows(2).map(|w| w[0]..w[1] + 1).collect()
+}
+
+/// The first sample, the turning points and the last sample of `n`, in order: the ends of the
+/// strokes.
+fn bounds(turns: &[usize], n: usize) -> Vec<usize> {
     let mut bounds = Vec::with_capacity(turns.len() + 2);
     bounds.push(0);
-    bounds.extend(turns);
+    bounds.extend_from_slice(turns);
     bounds.push(n - 1);
-    bounds.windows(2).map(|w| w[0]..w[1] + 1).collect()
+    bounds
 }
 
 /// One stroke over all `n` samples.
@@ -75,7 +81,7 @@ fn principal_axis(points: &[Vector3<f64>]) -> Vector3<f64> {
 /// The turning points of `s`: indices of the extremes from which `s` comes back by more than
 /// `hysteresis`, in order; highs and lows alternate. The path's first and last samples are not
 /// turning points.
-fn turning_points(s: &[f64], hysteresis: f64) -> Vec<usize> {
+pub fn turning_points(s: &[f64], hysteresis: f64) -> Vec<usize> {
     #[derive(PartialEq)]
     enum Heading {
         Unknown,
@@ -115,10 +121,7 @@ fn turning_points(s: &[f64], hysteresis: f64) -> Vec<usize> {
 /// the middle by dropping both of its turns (three strokes become one, going the same way).
 fn merge_short(turns: &mut Vec<usize>, t_s: &[f64], n: usize, min_length_s: f64) {
     loop {
-        let mut bounds = Vec::with_capacity(turns.len() + 2);
-        bounds.push(0);
-        bounds.extend(turns.iter().copied());
-        bounds.push(n - 1);
+        let bounds = bounds(turns, n);
         let shortest = bounds
             .windows(2)
             .enumerate()

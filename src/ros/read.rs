@@ -17,7 +17,7 @@ use std::path::Path;
 
 use mcap::sans_io::LinearReaderOptions;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use skill_runtime::demo::{Demo, DemoWarning, Loaded, WrenchDeclaration, WrenchFrame};
+use skill_runtime::demo::{orientation_warnings, Demo, Loaded, Normalised, WrenchDeclaration, WrenchFrame};
 
 use super::msgs::{decode_tf, MsgType, PoseStamped, WrenchStamped};
 use super::{BagError, BagOptions};
@@ -183,7 +183,7 @@ pub fn read_demo(path: &Path, options: &BagOptions) -> Result<BagDemo, BagError>
         force_n: Vec::with_capacity(kept.len()),
         torque_nm: Vec::with_capacity(kept.len()),
     };
-    let mut renormalised = (0usize, 0usize, 0.0f64);
+    let mut normalised = Normalised::default();
     let mut cursor = 0usize;
     for &i in &kept {
         let sample = &poses[i];
@@ -200,13 +200,7 @@ pub fn read_demo(path: &Path, options: &BagOptions) -> Result<BagDemo, BagError>
                 "the orientation quaternion has zero norm",
             ));
         }
-        if (norm - 1.0).abs() > 1e-6 {
-            if renormalised.0 == 0 {
-                renormalised.1 = sample.index as usize;
-            }
-            renormalised.0 += 1;
-            renormalised.2 = renormalised.2.max((norm - 1.0).abs());
-        }
+        normalised.note(norm, sample.index as usize);
         // The wrench samples around t: wrench_t[cursor] <= t < wrench_t[cursor + 1] (or t is the last).
         while cursor + 1 < wrench_t.len() && wrench_t[cursor + 1] <= t_ns {
             cursor += 1;
@@ -228,23 +222,9 @@ pub fn read_demo(path: &Path, options: &BagOptions) -> Result<BagDemo, BagError>
         demo.torque_nm.push(Vector3::new(values[3], values[4], values[5]));
     }
 
-    let mut warnings = Vec::new();
-    if renormalised.0 > 0 {
-        warnings.push(DemoWarning::Renormalised {
-            file: file.clone(),
-            count: renormalised.0,
-            first_row: renormalised.1,
-            max_deviation: renormalised.2,
-        });
-    }
-    let flipped = make_continuous(&mut demo.orientation);
-    if let Some(&first) = flipped.first() {
-        warnings.push(DemoWarning::SignFlipped {
-            file: file.clone(),
-            count: flipped.len(),
-            first_row: poses[kept[first]].index as usize,
-        });
-    }
+    let warnings = orientation_warnings(&file, &mut demo.orientation, &normalised, |k| {
+        poses[kept[k]].index as usize
+    });
 
     let wrench_frame_id = wrench.frame_id.clone().unwrap_or_default();
     let frame = if !wrench_frame_id.is_empty() && wrench_frame_id == parent_frame {
@@ -324,19 +304,6 @@ fn check_finite(file: &str, source: &str, index: u64, values: &[f64], names: &[&
         Some((value, name)) => Err(message_error(file, source, index, &format!("`{name}` is {value}"))),
         None => Ok(()),
     }
-}
-
-/// Negates quaternions so that each lies in the same hemisphere as its predecessor; the indices
-/// negated (as the CSV reader does).
-fn make_continuous(orientation: &mut [UnitQuaternion<f64>]) -> Vec<usize> {
-    let mut flipped = Vec::new();
-    for idx in 1..orientation.len() {
-        if orientation[idx].coords.dot(&orientation[idx - 1].coords) < 0.0 {
-            orientation[idx] = UnitQuaternion::new_unchecked(-orientation[idx].into_inner());
-            flipped.push(idx);
-        }
-    }
-    flipped
 }
 
 /// A stream's times in ns: its header stamps, or its log times when every stamp is zero.

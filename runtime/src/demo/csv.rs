@@ -24,9 +24,9 @@ use std::path::Path;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::quat::make_continuous;
+use super::quat::{orientation_warnings, Normalised};
 use super::wrench::{ForceSign, WrenchDeclaration, WrenchFrame};
-use super::{Demo, DemoError, DemoWarning, Loaded};
+use super::{Demo, DemoError, Loaded};
 
 /// The required columns, in the order the reader stores them.
 pub const COLUMNS: [&str; 14] = [
@@ -297,7 +297,7 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
     };
     let mut rows = Vec::new();
     let mut values = [0.0f64; 14];
-    let mut renormalised = (0usize, 0usize, 0.0f64);
+    let mut normalised = Normalised::default();
     while let Some((row, fields)) = next_row()? {
         if fields.len() != names.len() {
             return Err(DemoError::Ragged {
@@ -344,14 +344,7 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
                 row,
             });
         }
-        let deviation = (norm - 1.0).abs();
-        if deviation > 1e-6 {
-            if renormalised.0 == 0 {
-                renormalised.1 = row;
-            }
-            renormalised.0 += 1;
-            renormalised.2 = renormalised.2.max(deviation);
-        }
+        normalised.note(norm, row);
         demo.t_s.push(t);
         demo.position_m.push(Vector3::new(px, py, pz));
         demo.orientation.push(UnitQuaternion::from_quaternion(raw));
@@ -370,29 +363,14 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
             required,
         });
     }
-    let mut warnings = Vec::new();
-    if renormalised.0 > 0 {
-        warnings.push(DemoWarning::Renormalised {
-            file: file.to_owned(),
-            count: renormalised.0,
-            first_row: renormalised.1,
-            max_deviation: renormalised.2,
-        });
-    }
-    let flipped = make_continuous(&mut demo.orientation);
-    if let Some(&first) = flipped.first() {
-        warnings.push(DemoWarning::SignFlipped {
-            file: file.to_owned(),
-            count: flipped.len(),
-            first_row: rows[first],
-        });
-    }
+    let warnings = orientation_warnings(file, &mut demo.orientation, &normalised, |k| rows[k]);
     Ok(Loaded { demo, warnings, wrench })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::demo::DemoWarning;
 
     const HEADER: &str = "t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz";
 

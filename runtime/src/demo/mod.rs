@@ -15,6 +15,7 @@ mod filter;
 mod noise;
 mod prepare;
 mod quat;
+pub use self::quat::{orientation_warnings, Normalised};
 mod resample;
 mod sign;
 mod timing;

@@ -1,4 +1,4 @@
-//! Synthetic kinesthetic demonstrations of the four standard skills, made the way a person
+//! Synthetic kinesthetic demonstrations of the standard skills, made the way a person
 //! guides the arm, in the geometry of the shipped scenes (`examples/scenes/`), with the ground
 //! truth written beside each so tests and benches know the right answers.
 //!
@@ -36,7 +36,7 @@ pub const RATE_HZ: f64 = 1000.0;
 /// Height of the table top, the button cap and the drum's top in the shipped scenes \[m\].
 pub const SURFACE_Z_M: f64 = 0.300;
 
-/// The four standard skills.
+/// The standard skills with a shipped demonstration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StdSkill {
@@ -50,16 +50,30 @@ pub enum StdSkill {
     Contour,
     /// Wipe the table back and forth with a constant force: several strokes in one contact.
     Wipe,
+    /// Press the table to a force, hold it for 2 s, release and retract.
+    PressHold,
+    /// Move along a curved path down to the table and stop there in light contact (the
+    /// recording ends in contact).
+    GuardedMove,
+    /// Tap the table twice, at two spots 5 cm apart, with a hop between the taps.
+    DoubleTap,
+    /// Slide over the table at a light force, press harder where the slide ends, retract.
+    SlideThenPress,
 }
 
 impl StdSkill {
-    /// All five: the thesis's four, in the order it presents them last to first, then the wipe.
-    pub const ALL: [StdSkill; 5] = [
+    /// All nine: the thesis's four, in the order it presents them last to first, the wipe, then
+    /// the skills of the larger library (issue 12).
+    pub const ALL: [StdSkill; 9] = [
         StdSkill::Touch,
         StdSkill::Press,
         StdSkill::Slide,
         StdSkill::Contour,
         StdSkill::Wipe,
+        StdSkill::PressHold,
+        StdSkill::GuardedMove,
+        StdSkill::DoubleTap,
+        StdSkill::SlideThenPress,
     ];
 
     /// The skill's name (also its file stem).
@@ -70,13 +84,23 @@ impl StdSkill {
             StdSkill::Slide => "slide",
             StdSkill::Contour => "contour",
             StdSkill::Wipe => "wipe",
+            StdSkill::PressHold => "press_hold",
+            StdSkill::GuardedMove => "guarded_move",
+            StdSkill::DoubleTap => "double_tap",
+            StdSkill::SlideThenPress => "slide_then_press",
         }
     }
 
     /// The shipped scene it is demonstrated in.
     pub fn scene(self) -> &'static str {
         match self {
-            StdSkill::Touch | StdSkill::Slide | StdSkill::Wipe => "table.toml",
+            StdSkill::Touch
+            | StdSkill::Slide
+            | StdSkill::Wipe
+            | StdSkill::PressHold
+            | StdSkill::GuardedMove
+            | StdSkill::DoubleTap
+            | StdSkill::SlideThenPress => "table.toml",
             StdSkill::Press => "button.toml",
             StdSkill::Contour => "cylinder.toml",
         }
@@ -90,6 +114,10 @@ impl StdSkill {
             StdSkill::Slide => 13,
             StdSkill::Contour => 14,
             StdSkill::Wipe => 15,
+            StdSkill::PressHold => 16,
+            StdSkill::GuardedMove => 17,
+            StdSkill::DoubleTap => 18,
+            StdSkill::SlideThenPress => 19,
         }
     }
 }
@@ -175,6 +203,14 @@ pub struct GroundTruth {
     /// Where the strokes of a multi-stroke contact turn \[s\] (empty for the others).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub turns_s: Vec<f64>,
+    /// The steady applied force of each contact phase in time order \[N\] when there are
+    /// several (double tap: each tap; slide then press: the slide, then the press); empty for
+    /// the others.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phase_forces_n: Vec<f64>,
+    /// How long the force was held at its level \[s\] (press and hold; absent for the others).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_s: Option<f64>,
 }
 
 /// A generated demonstration.
@@ -303,6 +339,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
     let warp_of = |rng: &mut SplitMix64| rng.range(-0.15, 0.15);
     let mut phases: Vec<Phase> = Vec::new();
     let mut turns_s = Vec::new();
+    let mut phase_forces_n = Vec::new();
+    let mut hold_s = None;
     let surface;
     let friction;
     let force_n;
@@ -533,6 +571,211 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
                 radius_m: 0.15,
             };
         }
+
+        StdSkill::PressHold => {
+            friction = 0.5;
+            let level = 12.0;
+            force_n = level;
+            let hover = Vector3::new(0.5466, 0.0, 0.37);
+            let contact = Vector3::new(0.5466, 0.0, contact_z);
+            let back = Vector3::new(0.5466, 0.02, 0.37);
+            let (w1, w2) = (warp_of(&mut rng), warp_of(&mut rng));
+            // A person leans in over a few tenths of a second, holds the force as steadily as a
+            // hand can (±3 % at about 1 Hz) for the 2 s asked, and lets go a little faster.
+            let (rise, release) = (rng.range(0.35, 0.45), rng.range(0.25, 0.35));
+            let hold = 2.0;
+            hold_s = Some(hold);
+            let total = rise + hold + release;
+            let wobble_phase = rng.range(0.0, 2.0 * PI);
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(1.9, 2.2), hover, contact, w1));
+            phases.push(Phase {
+                label: "press_hold",
+                duration_s: total,
+                state: Box::new(move |u, t| {
+                    let local = u * total;
+                    let force = if local < rise {
+                        level * min_jerk(local / rise)
+                    } else if local < rise + hold {
+                        level * (1.0 + 0.03 * (2.0 * PI * 0.9 * t + wobble_phase).sin())
+                    } else {
+                        level * (1.0 - min_jerk((local - rise - hold) / release))
+                    };
+                    TipState {
+                        position: contact,
+                        normal: up,
+                        normal_force: force.max(0.0),
+                    }
+                }),
+            });
+            phases.push(moving("retract", rng.range(1.5, 1.8), contact, back, w2));
+            phases.push(rest(back));
+            surface = TruthSurface::Plane {
+                point_m: [0.5466, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
+        }
+        StdSkill::GuardedMove => {
+            friction = 0.4;
+            let level = 3.0;
+            force_n = level;
+            let start = Vector3::new(0.5466, 0.0, 0.37);
+            let goal = Vector3::new(0.60, 0.07, contact_z);
+            let w1 = warp_of(&mut rng);
+            let move_s = rng.range(2.6, 3.0);
+            let hold_phase = rng.range(0.0, 2.0 * PI);
+            phases.push(rest(start));
+            // Across first, then down: the sideways travel ends before the tool meets the table,
+            // which it meets nearly straight down (a person lowers a tool onto a surface).
+            phases.push(Phase {
+                label: "move",
+                duration_s: move_s,
+                state: Box::new(move |u, _t| {
+                    let across = min_jerk(warp((u / 0.85).clamp(0.0, 1.0), w1));
+                    let down = min_jerk(((u - 0.25) / 0.75).clamp(0.0, 1.0));
+                    let mut position = start + (goal - start) * across;
+                    position.z = start.z + (goal.z - start.z) * down;
+                    TipState {
+                        position,
+                        normal: up,
+                        normal_force: 0.0,
+                    }
+                }),
+            });
+            // The light touch-down and the steady hold; the recording ends in contact.
+            let contact_s = rng.range(1.2, 1.4);
+            phases.push(Phase {
+                label: "contact",
+                duration_s: contact_s,
+                state: Box::new(move |u, t| TipState {
+                    position: goal,
+                    normal: up,
+                    normal_force: pressing(u * contact_s, f64::INFINITY, level, t, hold_phase),
+                }),
+            });
+            surface = TruthSurface::Plane {
+                point_m: [0.55, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
+        }
+        StdSkill::DoubleTap => {
+            friction = 0.4;
+            let (first, second) = (5.0, 6.0);
+            force_n = first;
+            phase_forces_n = vec![first, second];
+            let hover = Vector3::new(0.52, -0.05, 0.37);
+            let spot1 = Vector3::new(0.52, -0.02, contact_z);
+            let spot2 = Vector3::new(0.56, 0.01, contact_z);
+            let leave = Vector3::new(0.58, 0.03, 0.37);
+            let (w1, w2, w3) = (warp_of(&mut rng), warp_of(&mut rng), warp_of(&mut rng));
+            let wobble_phase = rng.range(0.0, 2.0 * PI);
+            // A tap: down, a short press at a steady force (long enough to be a tap one means,
+            // half a second), up.
+            let tap = |label: &'static str, at: Vector3<f64>, level: f64, duration_s: f64| Phase {
+                label,
+                duration_s,
+                state: Box::new(move |u, t| TipState {
+                    position: at,
+                    normal: up,
+                    normal_force: touch_down_lift_off(u * duration_s, duration_s, level)
+                        * (1.0 + 0.03 * (2.0 * PI * 1.1 * t + wobble_phase).sin()),
+                }),
+            };
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(1.8, 2.1), hover, spot1, w1));
+            phases.push(tap("tap", spot1, first, rng.range(0.55, 0.65)));
+            // The hop: up 2.5 cm nearly straight, across, and down nearly straight onto the
+            // second spot.
+            let height = 0.025;
+            phases.push(Phase {
+                label: "hop",
+                duration_s: rng.range(1.1, 1.3),
+                state: Box::new(move |u, _t| {
+                    let across = min_jerk(warp(((u - 0.15) / 0.7).clamp(0.0, 1.0), w2));
+                    let lift = if u < 0.5 {
+                        min_jerk(u / 0.4)
+                    } else {
+                        1.0 - min_jerk((u - 0.55) / 0.45)
+                    };
+                    let mut position = spot1 + (spot2 - spot1) * across;
+                    position.z += height * lift;
+                    TipState {
+                        position,
+                        normal: up,
+                        normal_force: 0.0,
+                    }
+                }),
+            });
+            phases.push(tap("tap", spot2, second, rng.range(0.55, 0.65)));
+            phases.push(moving("leave", rng.range(1.4, 1.7), spot2, leave, w3));
+            phases.push(rest(leave));
+            surface = TruthSurface::Plane {
+                point_m: [0.55, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
+        }
+        StdSkill::SlideThenPress => {
+            friction = 0.4;
+            let (light, firm) = (5.0, 15.0);
+            force_n = light;
+            phase_forces_n = vec![light, firm];
+            let hover = Vector3::new(0.48, -0.08, 0.365);
+            let c1 = Vector3::new(0.48, -0.08, contact_z);
+            let c2 = Vector3::new(0.60, 0.02, contact_z);
+            let leave = Vector3::new(0.62, 0.04, 0.37);
+            let (w1, w2, w3) = (warp_of(&mut rng), warp_of(&mut rng), warp_of(&mut rng));
+            let slow_phase = rng.range(0.0, 2.0 * PI);
+            // One slow variation of the hand's force (±4 % at 0.7 Hz) over both contact phases.
+            let vary = move |t: f64| 1.0 + 0.04 * (2.0 * PI * 0.7 * t + slow_phase).sin();
+            let (settle, pause) = (0.25, 0.15);
+            let slide_s = rng.range(3.0, 3.4);
+            let sliding_s = settle + slide_s + pause;
+            let (ramp, hold, release) = (rng.range(0.35, 0.45), rng.range(0.9, 1.1), rng.range(0.25, 0.35));
+            let pressing_s = ramp + hold + release;
+            phases.push(rest(hover));
+            phases.push(moving("approach", rng.range(1.5, 1.8), hover, c1, w1));
+            phases.push(Phase {
+                label: "slide",
+                duration_s: sliding_s,
+                state: Box::new(move |u, t| {
+                    let local = u * sliding_s;
+                    let s = ((local - settle) / slide_s).clamp(0.0, 1.0);
+                    let progress = min_jerk(warp(s, w2));
+                    let lateral = Vector3::new(0.0, 0.015 * (PI * progress).sin(), 0.0);
+                    TipState {
+                        position: c1 + (c2 - c1) * progress + lateral,
+                        normal: up,
+                        normal_force: touch_down_lift_off(local, f64::INFINITY, light) * vary(t),
+                    }
+                }),
+            });
+            // At the slide's end, still: lean in to the firm force, hold it, let go.
+            phases.push(Phase {
+                label: "press",
+                duration_s: pressing_s,
+                state: Box::new(move |u, t| {
+                    let local = u * pressing_s;
+                    let level = if local < ramp {
+                        light + (firm - light) * min_jerk(local / ramp)
+                    } else if local < ramp + hold {
+                        firm
+                    } else {
+                        firm * (1.0 - min_jerk((local - ramp - hold) / release))
+                    };
+                    TipState {
+                        position: c2,
+                        normal: up,
+                        normal_force: level * vary(t),
+                    }
+                }),
+            });
+            phases.push(moving("leave", rng.range(1.4, 1.7), c2, leave, w3));
+            phases.push(rest(leave));
+            surface = TruthSurface::Plane {
+                point_m: [0.55, 0.0, SURFACE_Z_M],
+                normal: [0.0, 0.0, 1.0],
+            };
+        }
     }
 
     // Person and sensor imperfections.
@@ -629,6 +872,8 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             sensor_noise_n: force_noise,
             sensor_bias_n: bias.into(),
             turns_s,
+            phase_forces_n,
+            hold_s,
         },
     }
 }
@@ -739,7 +984,9 @@ mod tests {
             let demo = generate(skill, skill.default_seed());
             let segments = &demo.truth.segments;
             let expected = match skill {
-                StdSkill::Touch => 2 + 1,
+                StdSkill::GuardedMove => 2,
+                StdSkill::SlideThenPress => 4,
+                StdSkill::DoubleTap => 5,
                 _ => 3,
             };
             assert_eq!(segments.len(), expected, "{skill:?}");

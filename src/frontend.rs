@@ -19,6 +19,11 @@ pub enum ReadError {
 
 /// Compiles a `.skill` file from disk, reading its imports relative to it.
 pub fn compile_path(path: &Path) -> Result<Compilation, ReadError> {
+    compile_path_with(path, &[])
+}
+
+/// [`compile_path`] with `--param NAME=VALUE` settings.
+pub fn compile_path_with(path: &Path, params: &[String]) -> Result<Compilation, ReadError> {
     let name = path.to_string_lossy().replace('\\', "/");
     let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
         path: name.clone(),
@@ -32,5 +37,5 @@ pub fn compile_path(path: &Path) -> Result<Compilation, ReadError> {
             reason: "not valid UTF-8 text".to_string(),
         })
     };
-    Ok(skill_compiler::compile_bytes(&name, bytes, &mut load))
+    Ok(skill_compiler::compile_bytes(&name, bytes, params, &mut load))
 }

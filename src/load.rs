@@ -59,11 +59,23 @@ pub fn error_chain(err: &dyn std::error::Error) -> String {
 
 /// Compiles a `.skill` file and picks one skill of it (`name`, or the only one).
 pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program, skill_ir::Skill), Failure> {
-    let compilation = frontend::compile_path(path).map_err(|err| Failure::Usage(err.to_string()))?;
+    load_skill_with(path, name, &[])
+}
+
+/// [`load_skill`] with `--param NAME=VALUE` settings.
+pub fn load_skill_with(
+    path: &Path,
+    name: Option<&str>,
+    params: &[String],
+) -> Result<(skill_ir::Program, skill_ir::Skill), Failure> {
+    let compilation = frontend::compile_path_with(path, params).map_err(|err| Failure::Usage(err.to_string()))?;
     let Some(program) = compilation.program.clone() else {
         let mut text = String::new();
         for diag in &compilation.diags {
             text.push_str(&render::plain(diag, &compilation));
+            if let Some(help) = &diag.help {
+                let _ = writeln!(text, "  help: {help}");
+            }
         }
         return Err(Failure::Input(format!(
             "`{}` does not compile:\n{}",

@@ -7,7 +7,9 @@ use skill_runtime::exec::{bind, simulate, simulate_task, BoundSkill, ExecOptions
 use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::atomic;
-use crate::load::{error_chain, learn_from_files, learn_from_source, load_scene, load_skill, read_learned, Failure};
+use crate::load::{
+    error_chain, learn_from_files, learn_from_source, load_scene, load_skill_with, read_learned, Failure,
+};
 use crate::out::Verbosity;
 use crate::plot::{self, Plot, Subject, Trial};
 use skill_runtime::demo::Dialect;
@@ -49,6 +51,10 @@ pub struct RunArgs {
     /// Change a scene value, e.g. `--set table.z=0.195` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// Set a skill parameter, e.g. `--param hold=5s` (repeatable): in every skill of the file
+    /// that declares it; a task step's own values come after it.
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
     /// Write every control tick to this file: CSV, or a ROS 2 bag when it ends in `.mcap`
     /// (/joint_states, /tool_pose, /desired_pose, /wrench, /skill_state; see the README).
     #[arg(short, long)]
@@ -141,7 +147,8 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         atomic::refuse_inputs(out, "-o", &inputs).map_err(Failure::Usage)?;
     }
     if args.skill.is_none() {
-        let compilation = crate::frontend::compile_path(&args.file).map_err(|err| Failure::Usage(err.to_string()))?;
+        let compilation = crate::frontend::compile_path_with(&args.file, &args.params)
+            .map_err(|err| Failure::Usage(err.to_string()))?;
         if let Some(program) = &compilation.program {
             let task = match &args.task {
                 Some(name) => Some(
@@ -156,7 +163,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
             }
         }
     }
-    let (_, skill) = load_skill(&args.file, args.skill.as_deref())?;
+    let (_, skill) = load_skill_with(&args.file, args.skill.as_deref(), &args.params)?;
     let learned = match (&args.learned, &args.demo) {
         (Some(path), _) => read_learned(path)?,
         (None, Some(demo)) => {
@@ -367,8 +374,8 @@ fn summary_under(heading: &str, report: &RunReport, log: &RunLog) -> String {
 
 /// Learns (or reads) what a task step needs.
 fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(skill_ir::Skill, Learned), Failure> {
-    let skill = program
-        .skill(&step.skill)
+    let skill = step
+        .skill_in(program)
         .cloned()
         .ok_or_else(|| Failure::Input(format!("step `{}` runs unknown skill `{}`", step.name, step.skill)))?;
     let learned = match &step.input {

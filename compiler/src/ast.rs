@@ -41,6 +41,8 @@ pub struct Skill {
     pub doc: Vec<String>,
     /// The skill's name.
     pub name: Ident,
+    /// The `param` declarations in source order.
+    pub params: Vec<ParamDecl>,
     /// The `learn` blocks (one is expected; more are merged and duplicates reported).
     pub learn: Vec<LearnDecl>,
     /// The entries of the `limits` blocks, in source order (more blocks are merged).
@@ -48,6 +50,20 @@ pub struct Skill {
     /// States and terminals in source order.
     pub states: Vec<State>,
     /// The whole skill.
+    pub span: Span,
+}
+
+/// `param hold = 2 s`: a named value the skill's body uses, settable by a task step or the
+/// command line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamDecl {
+    /// Doc comment lines.
+    pub doc: Vec<String>,
+    /// The parameter's name.
+    pub name: Ident,
+    /// Its default value.
+    pub value: Expr,
+    /// The whole declaration (after its doc comment).
     pub span: Span,
 }
 

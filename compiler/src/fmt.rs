@@ -185,7 +185,18 @@ impl Printer<'_> {
         self.docs(skill.span.start, &skill.doc);
         self.line_at(skill.name.span.start, &format!("skill {} {{", skill.name.name));
         self.depth += 1;
+        for param in &skill.params {
+            self.docs(param.span.start, &param.doc);
+            self.line_at(
+                param.span.start,
+                &format!("param {} = {}", param.name.name, expr(&param.value)),
+            );
+            self.finish(param.span.end);
+        }
         if !skill.learn.is_empty() {
+            if !skill.params.is_empty() {
+                self.blank();
+            }
             self.line_at(skill.learn[0].span.start, "learn {");
             self.depth += 1;
             for decl in &skill.learn {
@@ -415,6 +426,11 @@ fn args(list: &[Arg]) -> String {
         })
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// An expression as the formatter writes it.
+pub(crate) fn expr_text(e: &Expr) -> String {
+    expr(e)
 }
 
 fn expr(e: &Expr) -> String {

@@ -18,7 +18,7 @@ pub mod source;
 pub mod syntax;
 pub mod units;
 
-pub use check::{DEFAULT_FORCE_BASIS, DEFAULT_GAINS, DEFAULT_MOTION_BASIS, DEFAULT_STIFFNESS};
+pub use check::{ParamSetting, DEFAULT_FORCE_BASIS, DEFAULT_GAINS, DEFAULT_MOTION_BASIS, DEFAULT_STIFFNESS};
 pub use diag::{Code, Diag, Severity};
 pub use source::{SourceFile, Span};
 
@@ -89,14 +89,15 @@ pub fn decode(name: &str, bytes: Vec<u8>) -> Result<SourceFile, Box<(SourceFile,
     }
 }
 
-/// Compiles a root file given as bytes, which may not be UTF-8 text; see [`compile`].
+/// Compiles a root file given as bytes, which may not be UTF-8 text; see [`compile_with_params`].
 pub fn compile_bytes(
     name: &str,
     bytes: Vec<u8>,
+    params: &[String],
     load: &mut dyn FnMut(&str) -> Result<String, LoadError>,
 ) -> Compilation {
     match decode(name, bytes) {
-        Ok(root) => compile(root, load),
+        Ok(root) => compile_with_params(root, params, load),
         Err(invalid) => {
             let (source, diag) = *invalid;
             Compilation {
@@ -112,6 +113,20 @@ pub fn compile_bytes(
 /// Compiles `root`. `load` returns the text of an imported file given its path, which is
 /// the import string joined lexically to the importing file's directory.
 pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, LoadError>) -> Compilation {
+    compile_with_params(root, &[], load)
+}
+
+/// The name under which `--param` settings appear in diagnostics.
+pub const PARAM_FILE: &str = "--param";
+
+/// Compiles `root` with parameter settings from the command line (`NAME=VALUE`, as given to
+/// `--param`): each sets the parameter of that name in every skill that declares one, before
+/// a task step's own settings; a setting no skill declares is an error.
+pub fn compile_with_params(
+    root: SourceFile,
+    params: &[String],
+    load: &mut dyn FnMut(&str) -> Result<String, LoadError>,
+) -> Compilation {
     let mut files = vec![root];
     let mut diags = Vec::new();
     let (root_ast, parse_diags) = syntax::parse(&files[0], 0);
@@ -119,14 +134,61 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
 
     let mut asts: Vec<ast::File> = vec![root_ast];
     let order = import::load_all(&mut files, &mut asts, &mut diags, load);
+    let command_line = command_line_settings(params, &mut files, &mut diags);
 
     // Check every file's skills; tasks see all skills loaded.
     let to_check = import::unique_skills(&order, &files, &asts, &mut diags);
     let skill_names: Vec<&str> = to_check.iter().map(|(_, skill)| skill.name.name.as_str()).collect();
+    let params_of: std::collections::HashMap<&str, Vec<&str>> = to_check
+        .iter()
+        .map(|(_, skill)| {
+            let names = skill.params.iter().map(|p| p.name.name.as_str()).collect();
+            (skill.name.name.as_str(), names)
+        })
+        .collect();
+    for setting in &command_line {
+        if !params_of.values().flatten().any(|name| *name == setting.name.name) {
+            let mut all: Vec<&str> = params_of.values().flatten().copied().collect();
+            all.sort_unstable();
+            all.dedup();
+            let help = diag::did_you_mean(&setting.name.name, all.iter().copied())
+                .map(|found| format!("did you mean `{found}`?"))
+                .unwrap_or_else(|| {
+                    if all.is_empty() {
+                        "no skill here declares a parameter (`param NAME = VALUE`)".to_string()
+                    } else {
+                        format!(
+                            "parameters declared: {}",
+                            all.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+                        )
+                    }
+                });
+            diags.push(
+                Diag::new(
+                    Code::UnknownName,
+                    setting.file,
+                    setting.name.span,
+                    format!(
+                        "no skill in `{}` has a parameter `{}`",
+                        files[0].name, setting.name.name
+                    ),
+                    "no such parameter",
+                )
+                .help(help),
+            );
+        }
+    }
+    let for_skill = |skill: &ast::Skill| -> Vec<ParamSetting> {
+        command_line
+            .iter()
+            .filter(|setting| skill.params.iter().any(|p| p.name.name == setting.name.name))
+            .cloned()
+            .collect()
+    };
     let mut skills: Vec<ir::Skill> = Vec::new();
     for &(file, skill) in &to_check {
         let mut checker = check::Checker::new(file, &files[file], &mut diags);
-        if let Some(lowered) = checker.skill(skill) {
+        if let Some(lowered) = checker.skill_with(skill, &for_skill(skill), true) {
             skills.push(lowered);
         }
     }
@@ -134,9 +196,47 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
     {
         let source = files[0].clone();
         let base_dir = import::parent_dir(&source.name);
-        let mut checker = check::Checker::new(0, &source, &mut diags);
         for task in &asts[0].tasks {
-            if let Some(lowered) = checker.task(task, &skill_names, &base_dir) {
+            let mut checker = check::Checker::new(0, &source, &mut diags);
+            let (mut lowered, step_params) = checker.task(task, &skill_names, &params_of, &base_dir);
+            let mut ok = lowered.is_some();
+            for step in step_params {
+                let Some(&(file, skill)) = to_check.iter().find(|(_, s)| s.name.name == step.skill) else {
+                    continue;
+                };
+                if !skills.iter().any(|s| s.name == step.skill) {
+                    // The skill itself has errors, reported once already.
+                    ok = false;
+                    continue;
+                }
+                let step_name = step.step;
+                let mut settings = for_skill(skill);
+                settings.extend(step.settings);
+                let mut scratch = Vec::new();
+                let specialised =
+                    check::Checker::new(file, &files[file], &mut scratch).skill_with(skill, &settings, false);
+                // Warnings were given by the skill's own check; errors are this step's values'.
+                for diag in scratch.into_iter().filter(|d| d.severity() == Severity::Error) {
+                    let note = format!("with the parameters step `{step_name}` sets");
+                    let help = match &diag.help {
+                        Some(help) => format!("{help} ({note})"),
+                        None => note,
+                    };
+                    diags.push(diag.help(help));
+                }
+                match (specialised, lowered.as_mut(), step.index) {
+                    (Some(skill_ir), Some(task_ir), Some(index)) => {
+                        let list = if step.fallback {
+                            &mut task_ir.fallbacks
+                        } else {
+                            &mut task_ir.steps
+                        };
+                        list[index].specialised = Some(Box::new(skill_ir));
+                    }
+                    _ => ok = false,
+                }
+            }
+            if let (true, Some(lowered)) = (ok, lowered) {
                 tasks.push(lowered);
             }
         }
@@ -157,4 +257,33 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
         ast: root_ast,
         program,
     }
+}
+
+/// Parses `--param` settings, each into a file of its own named [`PARAM_FILE`] (so that a
+/// diagnostic can point into it); a setting that does not parse is reported there.
+fn command_line_settings(params: &[String], files: &mut Vec<SourceFile>, diags: &mut Vec<Diag>) -> Vec<ParamSetting> {
+    let mut settings = Vec::new();
+    for text in params {
+        let file = files.len();
+        files.push(SourceFile::new(PARAM_FILE, text.as_str()));
+        match syntax::parse_param_setting(text) {
+            Ok((name, value)) => settings.push(ParamSetting {
+                name,
+                value,
+                file,
+                source: ir::ParamSource::CommandLine,
+            }),
+            Err(message) => diags.push(
+                Diag::new(
+                    Code::Unexpected,
+                    file,
+                    Span::new(0, text.len()),
+                    format!("cannot read `--param {text}`"),
+                    "here",
+                )
+                .help(message),
+            ),
+        }
+    }
+    settings
 }

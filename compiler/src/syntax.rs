@@ -298,6 +298,7 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
     let span = span_of(&pair);
     let mut doc = Vec::new();
     let mut name = None;
+    let mut params = Vec::new();
     let mut learn = Vec::new();
     let mut limits = Vec::new();
     let mut states = Vec::new();
@@ -305,6 +306,7 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
         match inner.as_rule() {
             Rule::doc => doc.push(doc_text(inner)),
             Rule::ident => name = Some(ident(inner)),
+            Rule::param_decl => params.push(param_decl(inner)),
             Rule::learn => learn.extend(inner.into_inner().map(learn_entry)),
             Rule::limits => limits.extend(inner.into_inner().map(limit_entry)),
             Rule::state => states.push(state(inner)),
@@ -315,10 +317,57 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
     Skill {
         doc,
         name: name.expect("grammar: skill has a name"),
+        params,
         learn,
         limits,
         states,
         span,
+    }
+}
+
+fn param_decl(pair: Pair<'_, Rule>) -> ParamDecl {
+    let mut doc = Vec::new();
+    let mut name = None;
+    let mut value = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => doc.push(doc_text(inner)),
+            Rule::param_kw => {}
+            Rule::ident if name.is_none() => name = Some(ident(inner)),
+            _ => value = Some(expr(inner)),
+        }
+    }
+    let name = name.expect("grammar: a parameter has a name");
+    let value = value.expect("grammar: a parameter has a value");
+    ParamDecl {
+        doc,
+        span: name.span.to(value.span),
+        name,
+        value,
+    }
+}
+
+/// Parses `NAME=VALUE` as given to `--param` (`hold=5s`, `hold=5 s`, `strokes=6`). The spans
+/// of the value are offsets into `text`.
+pub fn parse_param_setting(text: &str) -> Result<(Ident, Expr), String> {
+    if text.len() > 1000 {
+        return Err("a parameter setting is at most 1000 characters".to_string());
+    }
+    let mut pairs = SkillParser::parse(Rule::param_setting, text)
+        .map_err(|_| "expected `NAME=VALUE`, e.g. `--param hold=5s` or `--param strokes=6`".to_string())?;
+    let root = pairs.next().expect("grammar: `param_setting` yields one pair");
+    let mut name = None;
+    let mut value = None;
+    for inner in root.into_inner() {
+        match inner.as_rule() {
+            Rule::ident if name.is_none() => name = Some(ident(inner)),
+            Rule::EOI => {}
+            _ => value = Some(expr(inner)),
+        }
+    }
+    match (name, value) {
+        (Some(name), Some(value)) => Ok((name, value)),
+        _ => Err("expected `NAME=VALUE`, e.g. `--param hold=5s`".to_string()),
     }
 }
 

@@ -58,7 +58,7 @@ impl Case {
                 reason: "not valid UTF-8 text".to_string(),
             })
         };
-        skill_compiler::compile_bytes(&self.name, bytes, &mut load)
+        skill_compiler::compile_bytes(&self.name, bytes, &[], &mut load)
     }
 
     /// Compiles the file the way `skillc` does.

@@ -28,7 +28,10 @@ use serde::{Deserialize, Serialize};
 ///   its motion (both optional: a version 2 file reads as a version 3 file without them).
 /// - 4: guards may be [`Guard::Moved`], [`Guard::MovedDistance`], [`Guard::ForceMagnitude`] and
 ///   [`Guard::MomentMagnitude`] (new variants only: a version 3 file reads as a version 4 file).
-pub const IR_VERSION: u32 = 4;
+/// - 5: a skill lists its [`Param`]s and a task step may carry the skill specialised with the
+///   parameters it sets ([`Step::specialised`]) (both optional: a version 4 file reads as a
+///   version 5 file without them).
+pub const IR_VERSION: u32 = 5;
 
 /// A compiled `.skill` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -135,8 +138,40 @@ pub struct Skill {
     /// JSON when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub limits: Vec<Limit>,
+    /// The skill's parameters (`param hold = 2 s`) with the values this IR was compiled with:
+    /// they are already substituted into the states and limits, and listed here for reports.
+    /// Left out of the JSON when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub params: Vec<Param>,
     /// Where the skill is written.
     pub span: SourceSpan,
+}
+
+/// A skill parameter and the value it was compiled with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Param {
+    /// Its name.
+    pub name: String,
+    /// The value in SI units (a plain number for a dimensionless parameter).
+    pub value_si: f64,
+    /// The SI unit of the value (`s`, `m`, `N`, ...), empty for a plain number.
+    pub unit: String,
+    /// Who set the value.
+    pub set_by: ParamSource,
+    /// Its doc comment (empty when none).
+    pub doc: String,
+}
+
+/// Who set a parameter's value.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "name", rename_all = "snake_case")]
+pub enum ParamSource {
+    /// The declaration's default.
+    Default,
+    /// The command line (`--param NAME=VALUE`).
+    CommandLine,
+    /// A task step, by name.
+    Step(String),
 }
 
 /// One safety-supervisor limit set by name in a skill's `limits { }` block or a task step's
@@ -1006,8 +1041,20 @@ pub struct Step {
     pub limits: Vec<Limit>,
     /// What happens when it fails.
     pub on_failure: OnFailure,
+    /// The skill as this step runs it, when the step sets some of its parameters
+    /// (`press_hold(demo: "...", hold: 5 s)`): [`Step::skill`] compiled with those values.
+    /// `None` runs [`Program::skills`]' skill of that name. Left out of the JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specialised: Option<Box<Skill>>,
     /// Where it is written.
     pub span: SourceSpan,
+}
+
+impl Step {
+    /// The skill this step runs: its specialised skill, or the program's skill of its name.
+    pub fn skill_in<'p>(&'p self, program: &'p Program) -> Option<&'p Skill> {
+        self.specialised.as_deref().or_else(|| program.skill(&self.skill))
+    }
 }
 
 /// Where a step's learned features come from. Paths are resolved against the directory of

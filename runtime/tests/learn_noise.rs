@@ -37,6 +37,7 @@ fn two_motions() -> ir::Skill {
         states: Vec::new(),
         transitions: Vec::new(),
         limits: Vec::new(),
+        params: Vec::new(),
         span: span(),
     }
 }

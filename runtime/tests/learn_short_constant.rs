@@ -55,6 +55,7 @@ fn plan() -> ir::Skill {
         states: Vec::new(),
         transitions: Vec::new(),
         limits: Vec::new(),
+        params: Vec::new(),
         span: span(),
     }
 }

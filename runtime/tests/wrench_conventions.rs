@@ -252,6 +252,7 @@ fn slide_plan() -> ir::Skill {
         states: Vec::new(),
         transitions: Vec::new(),
         limits: Vec::new(),
+        params: Vec::new(),
         span: span(),
     }
 }

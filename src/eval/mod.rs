@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use skill_runtime::exec::{bind, simulate, BoundSkill, ExecOptions, Mode, RunLog};
 use skill_runtime::skill::{LearnOptions, Learned};
 
-use crate::load::{error_chain, learn_from_files, load_scene, load_skill, Failure};
+use crate::load::{error_chain, learn_from_files, load_scene, load_skill, load_skill_with, Failure};
 use crate::out::Verbosity;
 use crate::plot;
 use crate::profile::DesiredProfile;
@@ -54,6 +54,10 @@ pub struct EvalArgs {
     /// Tighten or loosen a safety limit for every trial, e.g. `--limit force=60` (see `skillc run`).
     #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = crate::run_cmd::parse_limit)]
     pub limits: Vec<(String, f64)>,
+    /// Set a skill parameter, e.g. `--param hold=5s` (repeatable): in every skill of the trials
+    /// that declares it, after the trials file's own `params`.
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
     /// Run every trial on this shipped robot instead of the scene's (`lwr4`, `iiwa14`): the
     /// skills learned from the same demonstrations, the robot's tool starting where the scene's
     /// robot starts its tool (inverse kinematics), objects and sensor as the scene has them.
@@ -134,6 +138,10 @@ pub struct SkillTrials {
     /// The ranges `--sweep` draws this skill's scenes from.
     #[serde(default)]
     pub sweep: sweep::SweepRanges,
+    /// Values for the skill's parameters, as `--param` takes them (`["hold=4s"]`); the command
+    /// line's `--param` settings come after them.
+    #[serde(default)]
+    pub params: Vec<String>,
 }
 
 /// Success thresholds of a trial.
@@ -303,7 +311,32 @@ fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
     Ok((trials, base_dir))
 }
 
-fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
+/// Compiles a trial's skill with the trials file's `params` and those of the command line
+/// that the skill declares (the command line's apply to every skill declaring them).
+fn skill_with_params(
+    file: &Path,
+    name: Option<&str>,
+    own: &[String],
+    command_line: &[String],
+) -> Result<skill_ir::Skill, Failure> {
+    if command_line.is_empty() {
+        return load_skill_with(file, name, own).map(|(_, skill)| skill);
+    }
+    let (_, plain) = load_skill_with(file, name, own)?;
+    let mut params = own.to_vec();
+    params.extend(
+        command_line
+            .iter()
+            .filter(|setting| {
+                let setting_name = setting.split('=').next().unwrap_or_default().trim();
+                plain.params.iter().any(|p| p.name == setting_name)
+            })
+            .cloned(),
+    );
+    load_skill_with(file, name, &params).map(|(_, skill)| skill)
+}
+
+fn prepare(spec: SkillTrials, base_dir: &Path, command_line: &[String]) -> Prepared {
     let file = base_dir.join(&spec.file);
     let demo = base_dir.join(&spec.demo);
     let fallback_name = spec.name.clone().unwrap_or_else(|| {
@@ -312,7 +345,7 @@ fn prepare(spec: SkillTrials, base_dir: &Path) -> Prepared {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "?".to_string())
     });
-    let loaded = load_skill(&file, spec.name.as_deref()).and_then(|(_, skill)| {
+    let loaded = skill_with_params(&file, spec.name.as_deref(), &spec.params, command_line).and_then(|skill| {
         let learned = learn_from_files(&skill, &demo, &LearnOptions::default())?;
         Ok((skill, learned))
     });
@@ -580,8 +613,24 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
         )?)),
         None => None,
     };
-    let mut prepared: Vec<Prepared> =
-        pool.install(|| selected.into_par_iter().map(|spec| prepare(spec, &base_dir)).collect());
+    let mut prepared: Vec<Prepared> = pool.install(|| {
+        selected
+            .into_par_iter()
+            .map(|spec| prepare(spec, &base_dir, &args.params))
+            .collect()
+    });
+    if let Some(unused) = args.params.iter().find(|setting| {
+        let name = setting.split('=').next().unwrap_or_default().trim();
+        !prepared.iter().any(|prep| {
+            prep.program_skill
+                .as_ref()
+                .is_ok_and(|(skill, _)| skill.params.iter().any(|p| p.name == name))
+        })
+    }) {
+        return Err(Failure::Usage(format!(
+            "--param `{unused}`: no skill of these trials declares that parameter"
+        )));
+    }
     for prep in &mut prepared {
         prep.swap.clone_from(&swap);
     }

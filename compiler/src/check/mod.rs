@@ -6,7 +6,8 @@
 //! whose methods are spread over this module's files by job: [`values`] (numbers, units,
 //! call arguments), [`scope`] (names), [`learn`], [`segments`], [`frames`] and [`forces`]
 //! (the learn block, whose functions [`signatures`] lists), [`limits`] (the supervisor's
-//! limits of a skill or a task step), [`states`], [`guards`] and [`reach`] (the state
+//! limits of a skill or a task step), [`params`] (skill parameters, substituted into the states
+//! and limits before they are checked), [`states`], [`guards`] and [`reach`] (the state
 //! machine), and [`task`].
 
 mod forces;
@@ -14,6 +15,7 @@ mod frames;
 mod guards;
 mod learn;
 mod limits;
+mod params;
 mod reach;
 mod scope;
 mod segments;
@@ -30,6 +32,7 @@ use signatures::Signature;
 use skill_ir as ir;
 
 pub use learn::{DEFAULT_FORCE_BASIS, DEFAULT_MOTION_BASIS};
+pub use params::ParamSetting;
 pub use states::{DEFAULT_GAINS, DEFAULT_STIFFNESS};
 
 /// "did you mean `x`?" for the candidate nearest to `name`, preferring the function `name` is
@@ -115,6 +118,7 @@ impl Checker<'_> {
             states,
             transitions,
             limits,
+            params: Vec::new(),
             span: self.ir_span(skill.name.span),
         })
     }

@@ -1,5 +1,6 @@
 //! Tasks: steps and fallbacks naming skills in scope, their inputs, overrides and limits.
 
+use super::params::ParamSetting;
 use super::{join_ticked, suggest, Checker};
 use crate::ast;
 use crate::diag::Code;
@@ -9,9 +10,34 @@ use crate::units::Dim;
 use skill_ir as ir;
 use std::collections::HashMap;
 
+/// The parameters one step of a task sets: the step's skill is compiled again with them.
+#[derive(Debug)]
+pub(crate) struct StepParams {
+    /// Whether the step is a fallback.
+    pub(crate) fallback: bool,
+    /// The step's name.
+    pub(crate) step: String,
+    /// Its index among the task's steps (or fallbacks), when it lowered without error.
+    pub(crate) index: Option<usize>,
+    /// The skill it runs.
+    pub(crate) skill: String,
+    /// The values it sets.
+    pub(crate) settings: Vec<ParamSetting>,
+}
+
+/// The arguments every step takes; the others name the skill's parameters.
+const STEP_ARGS: [&str; 6] = ["demo", "learned", "force_scale", "speed", "goal_offset", "limits"];
+
 impl Checker<'_> {
-    /// Checks one task against the skills in scope and returns its IR when it has no error.
-    pub(crate) fn task(&mut self, task: &ast::Task, skills: &[&str], base_dir: &str) -> Option<ir::Task> {
+    /// Checks one task against the skills in scope (with the names of their parameters) and
+    /// returns its IR when it has no error, with the parameters each step sets.
+    pub(crate) fn task(
+        &mut self,
+        task: &ast::Task,
+        skills: &[&str],
+        params_of: &HashMap<&str, Vec<&str>>,
+        base_dir: &str,
+    ) -> (Option<ir::Task>, Vec<StepParams>) {
         let errors_before = self.error_count();
         let mut names: HashMap<&str, (Span, bool)> = HashMap::new();
         let mut fallback_index: HashMap<&str, u32> = HashMap::new();
@@ -48,6 +74,7 @@ impl Checker<'_> {
         }
         let mut steps = Vec::new();
         let mut fallbacks = Vec::new();
+        let mut step_params = Vec::new();
         for step in &task.steps {
             if !skills.contains(&step.skill.name.as_str()) {
                 let help = suggest(&step.skill.name, skills.iter().copied()).unwrap_or_else(|| {
@@ -70,12 +97,60 @@ impl Checker<'_> {
                     .help(help);
                 self.report(diag);
             }
-            let bound = self.bind_args(
-                &step.skill.name,
-                &step.args,
-                &["demo", "learned", "force_scale", "speed", "goal_offset", "limits"],
-                0,
-            );
+            // Named arguments that name the skill's parameters set them; the rest are the step's.
+            let skill_params = params_of.get(step.skill.name.as_str());
+            let is_param = |arg: &ast::Arg| {
+                arg.key.as_ref().is_some_and(|key| {
+                    !STEP_ARGS.contains(&key.name.as_str())
+                        && skill_params.is_some_and(|names| names.contains(&key.name.as_str()))
+                })
+            };
+            let mut step_args: Vec<ast::Arg> = Vec::new();
+            for arg in step.args.iter().filter(|arg| !is_param(arg)) {
+                match &arg.key {
+                    Some(key) if !STEP_ARGS.contains(&key.name.as_str()) => {
+                        let mut known: Vec<&str> = STEP_ARGS.to_vec();
+                        let mut declared: Vec<&str> = skill_params.into_iter().flatten().copied().collect();
+                        declared.dedup();
+                        known.extend(declared.iter().copied());
+                        let help = suggest(&key.name, known.iter().copied()).unwrap_or_else(|| {
+                            format!(
+                                "a step takes {}{}",
+                                join_ticked(&STEP_ARGS),
+                                if declared.is_empty() {
+                                    format!("; `{}` declares no parameter", step.skill.name)
+                                } else {
+                                    format!("; `{}`'s parameters: {}", step.skill.name, join_ticked(&declared))
+                                }
+                            )
+                        });
+                        let diag = self
+                            .diag(
+                                Code::BadArgument,
+                                key.span,
+                                format!("unknown argument `{}` of `{}`", key.name, step.skill.name),
+                                "unknown argument",
+                            )
+                            .help(help);
+                        self.report(diag);
+                    }
+                    _ => step_args.push(arg.clone()),
+                }
+            }
+            let settings: Vec<ParamSetting> = step
+                .args
+                .iter()
+                .filter(|arg| is_param(arg))
+                .filter_map(|arg| {
+                    Some(ParamSetting {
+                        name: arg.key.clone()?,
+                        value: arg.value.clone(),
+                        file: self.file,
+                        source: ir::ParamSource::Step(step.name.name.clone()),
+                    })
+                })
+                .collect();
+            let bound = self.bind_args(&step.skill.name, &step_args, &STEP_ARGS, 0);
             let input = match (bound.get("demo"), bound.get("learned")) {
                 (Some(demo), None) => self
                     .string(demo, "`demo`")
@@ -168,6 +243,7 @@ impl Checker<'_> {
                     }
                 }
             };
+            let mut index = None;
             if let (Some(input), Some(on_failure)) = (input, on_failure) {
                 let lowered = ir::Step {
                     name: step.name.name.clone(),
@@ -176,24 +252,33 @@ impl Checker<'_> {
                     overrides,
                     limits,
                     on_failure,
+                    specialised: None,
                     span: self.ir_span(step.span),
                 };
-                if step.fallback {
-                    fallbacks.push(lowered);
-                } else {
-                    steps.push(lowered);
-                }
+                let list = if step.fallback { &mut fallbacks } else { &mut steps };
+                index = Some(list.len());
+                list.push(lowered);
+            }
+            if !settings.is_empty() {
+                step_params.push(StepParams {
+                    fallback: step.fallback,
+                    step: step.name.name.clone(),
+                    index,
+                    skill: step.skill.name.clone(),
+                    settings,
+                });
             }
         }
         if self.error_count() > errors_before {
-            return None;
+            return (None, step_params);
         }
-        Some(ir::Task {
+        let lowered = ir::Task {
             name: task.name.name.clone(),
             doc: task.doc.join("\n"),
             steps,
             fallbacks,
             span: self.ir_span(task.name.span),
-        })
+        };
+        (Some(lowered), step_params)
     }
 }

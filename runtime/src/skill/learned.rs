@@ -17,17 +17,14 @@ use crate::learn::constraint::ConstraintKind;
 /// The learned-file format version; bump on every change to the serialized form.
 pub const LEARNED_VERSION: u32 = 1;
 
-/// A 64-bit FNV-1a hash of the skill's IR (its canonical JSON), in hex: a learned file is only
-/// used with the IR it was learned for. The skill's `limits { }` are left out: like `--limit`,
-/// they tune the supervisor and change nothing learned, so tightening one needs no new learning.
+/// A 64-bit FNV-1a hash of what a skill learns (its name and its learning plan, as canonical
+/// JSON without spans and docs), in hex: a learned file is only used with the plan it was
+/// learned by. The states, transitions, limits and parameters are left out: they decide how the
+/// learned features run, not what they are, and binding checks by name that every feature a
+/// state uses is in the file; so a state, a limit or a parameter (`--param`, a task step's
+/// value) may change without learning again.
 pub fn ir_hash(skill: &skill_ir::Skill) -> String {
-    // Spans and docs do not change what is learned or run, nor do the skill's limits or how often
-    // a state repeats its motion (`repeat`): hash the rest, so that changing those needs no new
-    // learning.
-    let mut value = serde_json::to_value(skill).unwrap_or_default();
-    if let serde_json::Value::Object(map) = &mut value {
-        map.remove("limits");
-    }
+    let mut value = serde_json::json!({ "name": skill.name, "learn": skill.learn });
     strip_positions(&mut value);
     let text = value.to_string();
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
@@ -43,7 +40,6 @@ fn strip_positions(value: &mut serde_json::Value) {
         serde_json::Value::Object(map) => {
             map.remove("span");
             map.remove("doc");
-            map.remove("repeat");
             map.values_mut().for_each(strip_positions);
         }
         serde_json::Value::Array(items) => items.iter_mut().for_each(strip_positions),

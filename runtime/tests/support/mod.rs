@@ -248,6 +248,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
             })
             .collect(),
         limits: spec.limits,
+        params: Vec::new(),
         span: span(),
     }
 }

@@ -1,0 +1,434 @@
+//! Skill parameters: `param NAME = VALUE` declarations, the values a task step or `--param`
+//! sets for them, and their substitution into the skill's states and limits before those are
+//! checked, so that every use is checked (units, ranges, never-fires) with the value it runs with.
+
+use super::{join_ticked, suggest, Checker};
+use crate::ast::{self, ExprKind, GuardKind, StateBody, StmtKind, Target};
+use crate::diag::{Code, Diag};
+use crate::units::{self, Dim};
+use skill_ir as ir;
+use std::collections::HashMap;
+
+/// A value given to a parameter from outside its skill: a task step's argument or `--param`.
+#[derive(Debug, Clone)]
+pub struct ParamSetting {
+    /// The parameter's name as written where it is set.
+    pub name: ast::Ident,
+    /// The value, with spans into file `file`.
+    pub value: ast::Expr,
+    /// The file (index into the compilation's files) the setting is written in.
+    pub file: usize,
+    /// Who sets it.
+    pub source: ir::ParamSource,
+}
+
+/// Names a parameter cannot take: a task step's own arguments (a step sets parameters by name
+/// beside them) and the words states and limits already give a meaning to.
+pub(crate) const RESERVED: [&str; 9] = [
+    "demo",
+    "learned",
+    "force_scale",
+    "speed",
+    "goal_offset",
+    "limits",
+    "inf",
+    "reset_integral",
+    "tare",
+];
+
+/// What kind of value a parameter holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Shape {
+    Number,
+    Quantity(Dim),
+}
+
+impl Shape {
+    fn of(expr: &ast::Expr) -> Option<Shape> {
+        match &expr.kind {
+            ExprKind::Number(_) => Some(Shape::Number),
+            ExprKind::Quantity { unit, .. } => units::lookup(&unit.name).map(|(dim, _)| Shape::Quantity(dim)),
+            _ => None,
+        }
+    }
+
+    fn describe(self) -> String {
+        match self {
+            Shape::Number => "a plain number".to_string(),
+            Shape::Quantity(dim) => dim.describe().to_string(),
+        }
+    }
+
+    fn example(self) -> String {
+        match self {
+            Shape::Number => "3".to_string(),
+            Shape::Quantity(dim) => format!("2 {}", dim.example_unit()),
+        }
+    }
+}
+
+/// The SI unit of a dimension: its unit with factor 1.
+fn si_unit(dim: Dim) -> &'static str {
+    units::UNITS
+        .iter()
+        .find(|(_, d, factor)| *d == dim && *factor == 1.0)
+        .map(|(name, _, _)| *name)
+        .unwrap_or("")
+}
+
+/// One parameter with the value it takes in this compilation.
+struct Bound<'s> {
+    decl: &'s ast::ParamDecl,
+    shape: Shape,
+    value: ast::Expr,
+    source: ir::ParamSource,
+}
+
+impl Checker<'_> {
+    /// Checks a skill whose parameters take their defaults, overridden by `settings`; returns
+    /// its IR, with the values used listed in [`ir::Skill::params`], when there is no error.
+    /// `warn_unused` reports parameters the body never uses (off for a task step's copy, whose
+    /// warnings the skill's own check already gave).
+    pub(crate) fn skill_with(
+        &mut self,
+        skill: &ast::Skill,
+        settings: &[ParamSetting],
+        warn_unused: bool,
+    ) -> Option<ir::Skill> {
+        if skill.params.is_empty() && settings.is_empty() {
+            return self.skill(skill);
+        }
+        let bound = self.bind_params(skill, settings)?;
+        let values: HashMap<&str, &ast::Expr> = bound.iter().map(|b| (b.decl.name.name.as_str(), &b.value)).collect();
+        let mut body = skill.clone();
+        let mut used: HashMap<String, bool> = values.keys().map(|name| (name.to_string(), false)).collect();
+        self.params_in_learn(&body, &values);
+        substitute_body(&mut body, &values, &mut used);
+        if warn_unused {
+            for b in &bound {
+                if !used.get(&b.decl.name.name).copied().unwrap_or(true) {
+                    let diag = self
+                        .diag(
+                            Code::Unused,
+                            b.decl.name.span,
+                            format!("parameter `{}` is never used", b.decl.name.name),
+                            "unused",
+                        )
+                        .help("use it in a state or a limit by its name, or remove it");
+                    self.report(diag);
+                }
+            }
+        }
+        let mut lowered = self.skill(&body)?;
+        lowered.params = bound
+            .iter()
+            .filter_map(|b| {
+                let (value_si, unit) = match (&b.value.kind, b.shape) {
+                    (ExprKind::Number(number), Shape::Number) => (number.value, String::new()),
+                    (ExprKind::Quantity { number, unit }, Shape::Quantity(dim)) => {
+                        let (_, factor) = units::lookup(&unit.name)?;
+                        (number.value * factor, si_unit(dim).to_string())
+                    }
+                    _ => return None,
+                };
+                Some(ir::Param {
+                    name: b.decl.name.name.clone(),
+                    value_si,
+                    unit,
+                    set_by: b.source.clone(),
+                    doc: b.decl.doc.join("\n"),
+                })
+            })
+            .collect();
+        Some(lowered)
+    }
+
+    /// Checks the declarations and the settings against them.
+    fn bind_params<'s>(&mut self, skill: &'s ast::Skill, settings: &[ParamSetting]) -> Option<Vec<Bound<'s>>> {
+        let errors_before = self.error_count();
+        let mut taken: HashMap<&str, (ast::Ident, &'static str)> = HashMap::new();
+        for decl in &skill.learn {
+            if let Some(name) = &decl.name {
+                taken.insert(&name.name, (name.clone(), decl.kind.keyword()));
+            }
+        }
+        for state in &skill.states {
+            let kind = match state.body {
+                StateBody::Active(_) => "state",
+                StateBody::Terminal { .. } => "terminal state",
+            };
+            taken.insert(&state.name.name, (state.name.clone(), kind));
+        }
+        let mut bound: Vec<Bound<'s>> = Vec::new();
+        for decl in &skill.params {
+            let name = &decl.name;
+            if let Some(earlier) = bound.iter().find(|b| b.decl.name.name == name.name) {
+                let diag = self
+                    .diag(
+                        Code::DuplicateName,
+                        name.span,
+                        format!("parameter `{}` is declared twice", name.name),
+                        "second declaration",
+                    )
+                    .label(earlier.decl.name.span, "first declared here")
+                    .help("remove or rename one of them");
+                self.report(diag);
+                continue;
+            }
+            if let Some((other, kind)) = taken.get(name.name.as_str()) {
+                let diag = self
+                    .diag(
+                        Code::DuplicateName,
+                        name.span,
+                        format!("`{}` names a parameter and a {kind}", name.name),
+                        "parameter",
+                    )
+                    .label(other.span, format!("the {kind}"))
+                    .help("a parameter's name must be unique in its skill: rename one of them");
+                self.report(diag);
+                continue;
+            }
+            if RESERVED.contains(&name.name.as_str()) {
+                let diag = self
+                    .diag(
+                        Code::DuplicateName,
+                        name.span,
+                        format!("`{}` cannot name a parameter", name.name),
+                        "reserved",
+                    )
+                    .help(format!(
+                        "it already means something to a task step or a state ({}): rename it, e.g. `{}_value`",
+                        join_ticked(&RESERVED),
+                        name.name
+                    ));
+                self.report(diag);
+                continue;
+            }
+            let Some(shape) = Shape::of(&decl.value) else {
+                let mut diag = self.diag(
+                    Code::BadArgument,
+                    decl.value.span,
+                    format!("parameter `{}` needs a number or a quantity as its default", name.name),
+                    "not a number or a quantity",
+                );
+                diag = match &decl.value.kind {
+                    ExprKind::Quantity { unit, .. } => diag.help(format!(
+                        "unknown unit `{}`; units skillc knows: {}",
+                        unit.name,
+                        units::UNITS.iter().map(|(n, _, _)| *n).collect::<Vec<_>>().join(", ")
+                    )),
+                    _ => diag.help(format!(
+                        "write e.g. `param {} = 2 s` or `param {} = 3`",
+                        name.name, name.name
+                    )),
+                };
+                self.report(diag);
+                continue;
+            };
+            if !finite_literal(&decl.value) {
+                let diag = self.diag(
+                    Code::OutOfRange,
+                    decl.value.span,
+                    format!("parameter `{}` is not finite", name.name),
+                    "too large",
+                );
+                self.report(diag);
+                continue;
+            }
+            bound.push(Bound {
+                decl,
+                shape,
+                value: decl.value.clone(),
+                source: ir::ParamSource::Default,
+            });
+        }
+        for setting in settings {
+            let Some(slot) = bound.iter_mut().find(|b| b.decl.name.name == setting.name.name) else {
+                let names: Vec<&str> = skill.params.iter().map(|p| p.name.name.as_str()).collect();
+                let help = suggest(&setting.name.name, names.iter().copied()).unwrap_or_else(|| {
+                    if names.is_empty() {
+                        format!("`{}` declares no parameter", skill.name.name)
+                    } else {
+                        format!("its parameters: {}", join_ticked(&names))
+                    }
+                });
+                let diag = Diag::new(
+                    Code::UnknownName,
+                    setting.file,
+                    setting.name.span,
+                    format!("skill `{}` has no parameter `{}`", skill.name.name, setting.name.name),
+                    "no such parameter",
+                )
+                .help(help);
+                self.report(diag);
+                continue;
+            };
+            let found = Shape::of(&setting.value);
+            if found != Some(slot.shape) || !finite_literal(&setting.value) {
+                let what = match found {
+                    Some(shape) if finite_literal(&setting.value) => shape.describe(),
+                    Some(_) => "not finite".to_string(),
+                    None => "not a number or a quantity".to_string(),
+                };
+                let diag = Diag::new(
+                    Code::UnitMismatch,
+                    setting.file,
+                    setting.value.span,
+                    format!(
+                        "parameter `{}` of `{}` is {}, this value is {what}",
+                        setting.name.name,
+                        skill.name.name,
+                        slot.shape.describe()
+                    ),
+                    "wrong kind of value",
+                )
+                .help(format!(
+                    "give {} like its default `{}`, e.g. `{}`",
+                    slot.shape.describe(),
+                    crate::fmt::expr_text(&slot.decl.value),
+                    slot.shape.example()
+                ));
+                self.report(diag);
+                continue;
+            }
+            slot.value = setting.value.clone();
+            slot.source = setting.source.clone();
+        }
+        (self.error_count() == errors_before).then_some(bound)
+    }
+
+    /// Reports a parameter used inside `learn`, where it is not substituted: what is learned
+    /// must not depend on a value a task step sets.
+    fn params_in_learn(&mut self, skill: &ast::Skill, values: &HashMap<&str, &ast::Expr>) {
+        let mut found = Vec::new();
+        for decl in &skill.learn {
+            visit_names(&decl.value, &mut |name| {
+                if values.contains_key(name.name.as_str()) {
+                    found.push(name.clone());
+                }
+            });
+        }
+        for name in found {
+            let diag = self
+                .diag(
+                    Code::BadArgument,
+                    name.span,
+                    format!("parameter `{}` cannot be used in `learn`", name.name),
+                    "a parameter",
+                )
+                .help(
+                    "what is learned must not change with a value a task step sets: write the value here; \
+                     parameters serve states and limits",
+                );
+            self.report(diag);
+        }
+    }
+}
+
+/// Whether a number or quantity literal is finite.
+fn finite_literal(expr: &ast::Expr) -> bool {
+    match &expr.kind {
+        ExprKind::Number(number) => number.value.is_finite(),
+        ExprKind::Quantity { number, unit } => {
+            let factor = units::lookup(&unit.name).map_or(1.0, |(_, factor)| factor);
+            (number.value * factor).is_finite()
+        }
+        _ => true,
+    }
+}
+
+/// Calls `f` on every bare name inside `expr`.
+fn visit_names(expr: &ast::Expr, f: &mut dyn FnMut(&ast::Ident)) {
+    match &expr.kind {
+        ExprKind::Name(name) => f(name),
+        ExprKind::List(items) => items.iter().for_each(|item| visit_names(item, f)),
+        ExprKind::Record(args) | ExprKind::Call { args, .. } => args.iter().for_each(|arg| visit_names(&arg.value, f)),
+        _ => {}
+    }
+}
+
+/// Replaces every parameter's name in the skill's body by its value, spanned where the
+/// name is written (so that a message about the value points at its use).
+fn substitute_body(skill: &mut ast::Skill, values: &HashMap<&str, &ast::Expr>, used: &mut HashMap<String, bool>) {
+    let mut put = |expr: &mut ast::Expr| substitute(expr, values, used);
+    // A use in `learn` is an error (reported before); substituting it keeps the learn block's
+    // own check from reporting the name again.
+    for decl in &mut skill.learn {
+        put(&mut decl.value);
+    }
+    for entry in &mut skill.limits {
+        put(&mut entry.value);
+    }
+    for state in &mut skill.states {
+        let StateBody::Active(stmts) = &mut state.body else {
+            continue;
+        };
+        for stmt in stmts {
+            match &mut stmt.kind {
+                StmtKind::Stiffness(values) => values.iter_mut().for_each(|v| put(&mut v.value)),
+                StmtKind::Gains(args) => args.iter_mut().for_each(|arg| put(&mut arg.value)),
+                StmtKind::Entry(exprs) => exprs.iter_mut().for_each(&mut put),
+                StmtKind::Approach { within, speed } => {
+                    put(within);
+                    put(speed);
+                }
+                StmtKind::LiftOff { distance, speed } => {
+                    put(distance);
+                    if let Some(speed) = speed {
+                        put(speed);
+                    }
+                }
+                StmtKind::Repeat(count) => put(count),
+                StmtKind::Transition { guard, target } => {
+                    guard_exprs(guard, &mut put);
+                    if let Target::Extend { speed, max, .. } = target {
+                        put(speed);
+                        put(max);
+                    }
+                }
+                StmtKind::Move { .. } | StmtKind::Control { .. } | StmtKind::Apply(_) => {}
+            }
+        }
+    }
+}
+
+fn guard_exprs(guard: &mut ast::Guard, put: &mut dyn FnMut(&mut ast::Expr)) {
+    match &mut guard.kind {
+        GuardKind::Or(guards) | GuardKind::And(guards) => guards.iter_mut().for_each(|g| guard_exprs(g, put)),
+        GuardKind::Not(inner) => guard_exprs(inner, put),
+        GuardKind::Held { guard, duration } => {
+            guard_exprs(guard, put);
+            put(duration);
+        }
+        GuardKind::Force { rhs, .. } | GuardKind::Moved { rhs, .. } | GuardKind::Magnitude { rhs, .. } => put(rhs),
+        GuardKind::Timed { duration, .. } => put(duration),
+        GuardKind::ForceReached(tolerance) => put(tolerance),
+        GuardKind::Named(_) => {}
+    }
+}
+
+fn substitute(expr: &mut ast::Expr, values: &HashMap<&str, &ast::Expr>, used: &mut HashMap<String, bool>) {
+    match &mut expr.kind {
+        ExprKind::Name(name) => {
+            if let Some(value) = values.get(name.name.as_str()) {
+                used.insert(name.name.clone(), true);
+                let span = expr.span;
+                *expr = respan((*value).clone(), span);
+            }
+        }
+        ExprKind::List(items) => items.iter_mut().for_each(|item| substitute(item, values, used)),
+        ExprKind::Record(args) | ExprKind::Call { args, .. } => {
+            args.iter_mut().for_each(|arg| substitute(&mut arg.value, values, used))
+        }
+        _ => {}
+    }
+}
+
+/// `expr` with every span set to `span`.
+fn respan(mut expr: ast::Expr, span: crate::source::Span) -> ast::Expr {
+    expr.span = span;
+    if let ExprKind::Quantity { number: _, unit } = &mut expr.kind {
+        unit.span = span;
+    }
+    expr
+}

@@ -26,6 +26,11 @@ fn check_exits_zero_on_the_standard_library() {
         "stdlib-skills/press.skill",
         "stdlib-skills/slide.skill",
         "stdlib-skills/contour.skill",
+        "stdlib-skills/wipe.skill",
+        "stdlib-skills/press_hold.skill",
+        "stdlib-skills/guarded_move.skill",
+        "stdlib-skills/double_tap.skill",
+        "stdlib-skills/slide_then_press.skill",
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no problems"));

@@ -139,16 +139,17 @@ pub fn compile_with_params(
     // Check every file's skills; tasks see all skills loaded.
     let to_check = import::unique_skills(&order, &files, &asts, &mut diags);
     let skill_names: Vec<&str> = to_check.iter().map(|(_, skill)| skill.name.name.as_str()).collect();
-    let params_of: std::collections::HashMap<&str, Vec<&str>> = to_check
+    let facts: std::collections::HashMap<&str, check::SkillFacts<'_>> = to_check
         .iter()
-        .map(|(_, skill)| {
-            let names = skill.params.iter().map(|p| p.name.name.as_str()).collect();
-            (skill.name.name.as_str(), names)
-        })
+        .map(|(_, skill)| (skill.name.name.as_str(), check::SkillFacts::of(skill)))
         .collect();
     for setting in &command_line {
-        if !params_of.values().flatten().any(|name| *name == setting.name.name) {
-            let mut all: Vec<&str> = params_of.values().flatten().copied().collect();
+        if !facts
+            .values()
+            .flat_map(|f| &f.params)
+            .any(|name| *name == setting.name.name)
+        {
+            let mut all: Vec<&str> = facts.values().flat_map(|f| &f.params).copied().collect();
             all.sort_unstable();
             all.dedup();
             let help = diag::did_you_mean(&setting.name.name, all.iter().copied())
@@ -198,7 +199,7 @@ pub fn compile_with_params(
         let base_dir = import::parent_dir(&source.name);
         for task in &asts[0].tasks {
             let mut checker = check::Checker::new(0, &source, &mut diags);
-            let (mut lowered, step_params) = checker.task(task, &skill_names, &params_of, &base_dir);
+            let (mut lowered, step_params) = checker.task(task, &skill_names, &facts, &base_dir);
             let mut ok = lowered.is_some();
             for step in step_params {
                 let Some(&(file, skill)) = to_check.iter().find(|(_, s)| s.name.name == step.skill) else {

@@ -28,9 +28,9 @@ use serde::{Deserialize, Serialize};
 ///   its motion (both optional: a version 2 file reads as a version 3 file without them).
 /// - 4: guards may be [`Guard::Moved`], [`Guard::MovedDistance`], [`Guard::ForceMagnitude`] and
 ///   [`Guard::MomentMagnitude`] (new variants only: a version 3 file reads as a version 4 file).
-/// - 5: a skill lists its [`Param`]s and a task step may carry the skill specialised with the
-///   parameters it sets ([`Step::specialised`]) (both optional: a version 4 file reads as a
-///   version 5 file without them).
+/// - 5: a skill lists its [`Param`]s, a task step may carry the skill specialised with the
+///   parameters it sets ([`Step::specialised`]) and may start at a pose an earlier step found
+///   ([`Step::at`]) (all optional: a version 4 file reads as a version 5 file without them).
 pub const IR_VERSION: u32 = 5;
 
 /// A compiled `.skill` file.
@@ -1046,8 +1046,23 @@ pub struct Step {
     /// `None` runs [`Program::skills`]' skill of that name. Left out of the JSON when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub specialised: Option<Box<Skill>>,
+    /// `at: find.settle`: the step's goals move so that the goal of its first state's motion
+    /// lands where the tool point was when step `find` entered its state `settle` (plus
+    /// [`Overrides::goal_offset_m`]). Left out of the JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<Anchor>,
     /// Where it is written.
     pub span: SourceSpan,
+}
+
+/// A pose found by an earlier step of a task: where the tool point was when that step entered
+/// one of its skill's states (the first time).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Anchor {
+    /// The earlier step's name.
+    pub step: String,
+    /// The state of that step's skill.
+    pub state: String,
 }
 
 impl Step {

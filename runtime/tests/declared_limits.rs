@@ -86,6 +86,7 @@ fn a_task_step_limit_sits_between_the_skill_and_the_command_line() {
         limits,
         on_failure: ir::OnFailure::Abort,
         specialised: None,
+        at: None,
         span: span(),
     };
     let run_task = |step: &ir::Step, options: &ExecOptions| {

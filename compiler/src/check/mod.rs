@@ -34,6 +34,7 @@ use skill_ir as ir;
 pub use learn::{DEFAULT_FORCE_BASIS, DEFAULT_MOTION_BASIS};
 pub use params::ParamSetting;
 pub use states::{DEFAULT_GAINS, DEFAULT_STIFFNESS};
+pub(crate) use task::SkillFacts;
 
 /// "did you mean `x`?" for the candidate nearest to `name`, preferring the function `name` is
 /// an alias of.

@@ -2,6 +2,7 @@
 //! sets for them, and their substitution into the skill's states and limits before those are
 //! checked, so that every use is checked (units, ranges, never-fires) with the value it runs with.
 
+use super::task::STEP_ARGS;
 use super::{join_ticked, suggest, Checker};
 use crate::ast::{self, ExprKind, GuardKind, StateBody, StmtKind, Target};
 use crate::diag::{Code, Diag};
@@ -22,19 +23,9 @@ pub struct ParamSetting {
     pub source: ir::ParamSource,
 }
 
-/// Names a parameter cannot take: a task step's own arguments (a step sets parameters by name
-/// beside them) and the words states and limits already give a meaning to.
-pub(crate) const RESERVED: [&str; 9] = [
-    "demo",
-    "learned",
-    "force_scale",
-    "speed",
-    "goal_offset",
-    "limits",
-    "inf",
-    "reset_integral",
-    "tare",
-];
+/// Names a parameter cannot take besides a task step's own arguments ([`STEP_ARGS`]: a step
+/// sets parameters by name beside them): the words states and limits already give a meaning to.
+const RESERVED_IN_STATES: [&str; 3] = ["inf", "reset_integral", "tare"];
 
 /// What kind of value a parameter holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -188,7 +179,7 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             }
-            if RESERVED.contains(&name.name.as_str()) {
+            if STEP_ARGS.contains(&name.name.as_str()) || RESERVED_IN_STATES.contains(&name.name.as_str()) {
                 let diag = self
                     .diag(
                         Code::DuplicateName,
@@ -197,8 +188,9 @@ impl Checker<'_> {
                         "reserved",
                     )
                     .help(format!(
-                        "it already means something to a task step or a state ({}): rename it, e.g. `{}_value`",
-                        join_ticked(&RESERVED),
+                        "it already means something to a task step ({}) or a state ({}): rename it, e.g. `{}_value`",
+                        join_ticked(&STEP_ARGS),
+                        join_ticked(&RESERVED_IN_STATES),
                         name.name
                     ));
                 self.report(diag);

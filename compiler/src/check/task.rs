@@ -26,7 +26,19 @@ pub(crate) struct StepParams {
 }
 
 /// The arguments every step takes; the others name the skill's parameters.
-const STEP_ARGS: [&str; 6] = ["demo", "learned", "force_scale", "speed", "goal_offset", "limits"];
+pub(crate) const STEP_ARGS: [&str; 7] = ["demo", "learned", "force_scale", "speed", "goal_offset", "limits", "at"];
+
+/// What a task needs to know of a skill in scope.
+#[derive(Debug, Default)]
+pub(crate) struct SkillFacts<'s> {
+    /// Its parameters' names.
+    pub(crate) params: Vec<&'s str>,
+    /// Its states' names (active and terminal).
+    pub(crate) states: Vec<&'s str>,
+    /// Whether its first state runs a motion (`move`, not `relative`: that one starts where the
+    /// tool is), whose goal `at:` places.
+    pub(crate) first_moves: bool,
+}
 
 impl Checker<'_> {
     /// Checks one task against the skills in scope (with the names of their parameters) and
@@ -35,7 +47,7 @@ impl Checker<'_> {
         &mut self,
         task: &ast::Task,
         skills: &[&str],
-        params_of: &HashMap<&str, Vec<&str>>,
+        facts: &HashMap<&str, SkillFacts<'_>>,
         base_dir: &str,
     ) -> (Option<ir::Task>, Vec<StepParams>) {
         let errors_before = self.error_count();
@@ -98,7 +110,8 @@ impl Checker<'_> {
                 self.report(diag);
             }
             // Named arguments that name the skill's parameters set them; the rest are the step's.
-            let skill_params = params_of.get(step.skill.name.as_str());
+            let skill_facts = facts.get(step.skill.name.as_str());
+            let skill_params = skill_facts.map(|facts| &facts.params);
             let is_param = |arg: &ast::Arg| {
                 arg.key.as_ref().is_some_and(|key| {
                     !STEP_ARGS.contains(&key.name.as_str())
@@ -206,6 +219,9 @@ impl Checker<'_> {
                 .get("limits")
                 .map(|expr| self.step_limits(expr))
                 .unwrap_or_default();
+            let at = bound
+                .get("at")
+                .and_then(|expr| self.anchor(expr, step, &task.steps, facts));
             let on_failure = match &step.on_failure {
                 None | Some(ast::OnFailure::Abort(_)) => Some(ir::OnFailure::Abort),
                 Some(ast::OnFailure::Fallback(name)) => {
@@ -253,6 +269,7 @@ impl Checker<'_> {
                     limits,
                     on_failure,
                     specialised: None,
+                    at,
                     span: self.ir_span(step.span),
                 };
                 let list = if step.fallback { &mut fallbacks } else { &mut steps };
@@ -280,5 +297,127 @@ impl Checker<'_> {
             span: self.ir_span(task.name.span),
         };
         (Some(lowered), step_params)
+    }
+}
+
+impl Checker<'_> {
+    /// `at: STEP.STATE`: an earlier step of the task and a state of its skill, for a step whose
+    /// skill starts with a motion.
+    fn anchor(
+        &mut self,
+        expr: &ast::Expr,
+        step: &ast::Step,
+        all: &[ast::Step],
+        facts: &HashMap<&str, SkillFacts<'_>>,
+    ) -> Option<ir::Anchor> {
+        let ast::ExprKind::Axis(reference) = &expr.kind else {
+            let diag = self
+                .diag(
+                    Code::BadArgument,
+                    expr.span,
+                    "`at` takes an earlier step and a state of its skill",
+                    "not `STEP.STATE`",
+                )
+                .help("write e.g. `at: find.settle`: where step `find` entered its state `settle`");
+            self.report(diag);
+            return None;
+        };
+        let (step_name, state_name) = (&reference.frame, &reference.axis);
+        let position = all.iter().position(|s| std::ptr::eq(s, step)).unwrap_or(all.len());
+        let earlier: Vec<&ast::Step> = all[..position].iter().filter(|s| !s.fallback).collect();
+        let Some(found) = earlier.iter().find(|s| s.name.name == step_name.name) else {
+            let names: Vec<&str> = earlier.iter().map(|s| s.name.name.as_str()).collect();
+            let is_later = all.iter().any(|s| s.name.name == step_name.name);
+            let help = if is_later {
+                format!(
+                    "`{}` runs after this step (or is a fallback): name a step that runs before it",
+                    step_name.name
+                )
+            } else {
+                suggest(&step_name.name, names.iter().copied()).unwrap_or_else(|| {
+                    if names.is_empty() {
+                        "the first step cannot start where another ended: there is none before it".to_string()
+                    } else {
+                        format!("steps before this one: {}", join_ticked(&names))
+                    }
+                })
+            };
+            let diag = self
+                .diag(
+                    Code::UnknownName,
+                    step_name.span,
+                    format!("no step `{}` runs before step `{}`", step_name.name, step.name.name),
+                    "not an earlier step",
+                )
+                .help(help);
+            self.report(diag);
+            return None;
+        };
+        let mut ok = true;
+        if let Some(found_facts) = facts.get(found.skill.name.as_str()) {
+            if !found_facts.states.contains(&state_name.name.as_str()) {
+                let help = suggest(&state_name.name, found_facts.states.iter().copied()).unwrap_or_else(|| {
+                    format!("`{}`'s states: {}", found.skill.name, join_ticked(&found_facts.states))
+                });
+                let diag = self
+                    .diag(
+                        Code::UnknownName,
+                        state_name.span,
+                        format!(
+                            "skill `{}` (step `{}`) has no state `{}`",
+                            found.skill.name, found.name.name, state_name.name
+                        ),
+                        "no such state",
+                    )
+                    .help(help);
+                self.report(diag);
+                ok = false;
+            }
+        }
+        if let Some(own) = facts.get(step.skill.name.as_str()) {
+            if !own.first_moves {
+                let diag = self
+                    .diag(
+                        Code::BadArgument,
+                        expr.span,
+                        format!(
+                            "`{}` does not start with a motion whose goal `at` can place",
+                            step.skill.name
+                        ),
+                        "nothing to place",
+                    )
+                    .help(
+                        "`at` moves the goal of the first state's `move` (not a `move ... relative`, which starts \
+                         where the tool is); give the first state such a `move`, or use `goal_offset`",
+                    );
+                self.report(diag);
+                ok = false;
+            }
+        }
+        ok.then(|| ir::Anchor {
+            step: step_name.name.clone(),
+            state: state_name.name.clone(),
+        })
+    }
+}
+
+impl<'s> SkillFacts<'s> {
+    /// What a task needs to know of `skill`.
+    pub(crate) fn of(skill: &'s ast::Skill) -> Self {
+        let first_moves = skill
+            .states
+            .iter()
+            .find(|state| matches!(state.body, ast::StateBody::Active(_)))
+            .is_some_and(|state| match &state.body {
+                ast::StateBody::Active(stmts) => stmts
+                    .iter()
+                    .any(|stmt| matches!(stmt.kind, ast::StmtKind::Move { relative: false, .. })),
+                ast::StateBody::Terminal { .. } => false,
+            });
+        SkillFacts {
+            params: skill.params.iter().map(|p| p.name.name.as_str()).collect(),
+            states: skill.states.iter().map(|s| s.name.name.as_str()).collect(),
+            first_moves,
+        }
     }
 }

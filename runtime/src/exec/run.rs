@@ -110,6 +110,9 @@ pub struct Visit {
     pub enter_s: f64,
     /// Exit \[s\].
     pub exit_s: f64,
+    /// Where the tool point was at entry \[m\], base frame (what a later task step's
+    /// `at: STEP.STATE` places its goal at).
+    pub enter_position_m: [f64; 3],
 }
 
 /// How a run ended.
@@ -129,6 +132,21 @@ pub struct RunReport {
     pub reflex: Option<Violation>,
     /// Peak force and speed, smallest joint margin, time at the torque limit.
     pub safety: SafetyStats,
+}
+
+impl RunReport {
+    /// A failure before anything moved, e.g. a task step whose `at:` pose was never found.
+    pub fn not_started(message: String) -> Self {
+        RunReport {
+            outcome: ir::Outcome::Failure,
+            terminal: None,
+            message,
+            visits: Vec::new(),
+            duration_s: 0.0,
+            reflex: None,
+            safety: SafetyStats::default(),
+        }
+    }
 }
 
 /// The name of the replay state that covers `segment` (0-based): `replay:<motion>` for the
@@ -285,6 +303,7 @@ fn skill_loop(
         state: machine.state().name.clone(),
         enter_s: rig.time_s() - start_s,
         exit_s: 0.0,
+        enter_position_m: rig.tool().translation.vector.into(),
     });
     let mut last_cmd: Option<Command> = None;
     let dt = options.dt_s;
@@ -336,6 +355,7 @@ fn skill_loop(
                 state: skill.states[target.index()].name.clone(),
                 enter_s: t - start_s,
                 exit_s: 0.0,
+                enter_position_m: rig.tool().translation.vector.into(),
             });
             machine.enter(target, t, rig)?;
             if let ir::StateKind::Terminal {
@@ -418,6 +438,7 @@ fn replay_loop(
         let state_name = replay_state(learned, segment_index);
         let state = log.as_mut().map_or(0, |log| log.state_index(&state_name));
         let enter_s = rig.time_s() - start_s;
+        let enter_position_m: [f64; 3] = rig.tool().translation.vector.into();
         match motion {
             Some((name, motion)) => {
                 let mut rollout = MotionRollout::start(
@@ -459,6 +480,7 @@ fn replay_loop(
             state: state_name,
             enter_s,
             exit_s: rig.time_s() - start_s,
+            enter_position_m,
         });
     }
     Ok(RunReport {

@@ -141,26 +141,47 @@ fn task_on(
     fallbacks: &[TaskStep<'_, '_>],
     options: &ExecOptions,
 ) -> Result<TaskRun, SessionError> {
-    let mut reports = Vec::new();
-    let run_step = |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, rig: &mut Rig<'_>| {
-        let step_options = ExecOptions {
-            overrides: task_step.step.overrides,
-            step_limits: task_step.step.limits.clone(),
-            prepose: first && options.prepose,
-            ..options.clone()
+    let mut reports: Vec<StepReport> = Vec::new();
+    let run_step =
+        |task_step: &TaskStep<'_, '_>, first: bool, fallback: bool, reports: &[StepReport], rig: &mut Rig<'_>| {
+            let step = task_step.step;
+            let mut overrides = step.overrides;
+            if let Some(anchor) = &step.at {
+                match anchor_offset(anchor, &task_step.bound, reports) {
+                    Ok(offset) => {
+                        for (total, extra) in overrides.goal_offset_m.iter_mut().zip(offset) {
+                            *total += extra;
+                        }
+                    }
+                    Err(message) => {
+                        return Ok(StepReport {
+                            step: step.name.clone(),
+                            skill: step.skill.clone(),
+                            fallback,
+                            report: RunReport::not_started(message),
+                            log: RunLog::default(),
+                        })
+                    }
+                }
+            }
+            let step_options = ExecOptions {
+                overrides,
+                step_limits: step.limits.clone(),
+                prepose: first && options.prepose,
+                ..options.clone()
+            };
+            let mut log = RunLog::default();
+            let report = run_skill(&task_step.bound, rig, &step_options, options.log.then_some(&mut log))?;
+            Ok::<_, ExecError>(StepReport {
+                step: step.name.clone(),
+                skill: step.skill.clone(),
+                fallback,
+                report,
+                log,
+            })
         };
-        let mut log = RunLog::default();
-        let report = run_skill(&task_step.bound, rig, &step_options, options.log.then_some(&mut log))?;
-        Ok::<_, ExecError>(StepReport {
-            step: task_step.step.name.clone(),
-            skill: task_step.step.skill.clone(),
-            fallback,
-            report,
-            log,
-        })
-    };
     for (index, task_step) in steps.iter().enumerate() {
-        let report = run_step(task_step, index == 0, false, rig)?;
+        let report = run_step(task_step, index == 0, false, &reports, rig)?;
         let failed = report.report.outcome == skill_ir::Outcome::Failure;
         // After a reflex the arm stands stopped, as a real arm does until an operator looks:
         // no fallback runs.
@@ -169,7 +190,8 @@ fn task_on(
         if failed {
             if let (skill_ir::OnFailure::Fallback(fallback), false) = (&task_step.step.on_failure, reflex) {
                 if let Some(fallback) = fallbacks.get(*fallback as usize) {
-                    reports.push(run_step(fallback, false, true, rig)?);
+                    let report = run_step(fallback, false, true, &reports, rig)?;
+                    reports.push(report);
                 }
             }
             return Ok(TaskRun {
@@ -182,4 +204,42 @@ fn task_on(
         steps: reports,
         outcome: skill_ir::Outcome::Success,
     })
+}
+
+/// The goal offset `at: STEP.STATE` gives a step: from the goal of its first state's motion to
+/// where the tool point was when the earlier step first entered that state. An error message
+/// when that step did not run or never entered the state, or the skill starts without a motion.
+fn anchor_offset(
+    anchor: &skill_ir::Anchor,
+    bound: &BoundSkill<'_>,
+    earlier: &[StepReport],
+) -> Result<[f64; 3], String> {
+    let Some(found) = earlier
+        .iter()
+        .rev()
+        .find(|report| report.step == anchor.step && !report.fallback)
+    else {
+        return Err(format!(
+            "it starts at `{}.{}`, but step `{}` did not run before it",
+            anchor.step, anchor.state, anchor.step
+        ));
+    };
+    let Some(visit) = found.report.visits.iter().find(|visit| visit.state == anchor.state) else {
+        return Err(format!(
+            "it starts at `{}.{}`, but step `{}` never entered state `{}`",
+            anchor.step, anchor.state, anchor.step, anchor.state
+        ));
+    };
+    let initial = &bound.skill.states[bound.skill.initial.index()];
+    let goal = match &initial.kind {
+        skill_ir::StateKind::Active(active) => active.motion.map(|id| &bound.motions[id.index()].position.goal),
+        skill_ir::StateKind::Terminal { .. } => None,
+    };
+    let Some(goal) = goal.filter(|goal| goal.len() == 3) else {
+        return Err(format!(
+            "it starts at `{}.{}`, but its first state `{}` runs no motion to place there",
+            anchor.step, anchor.state, initial.name
+        ));
+    };
+    Ok(std::array::from_fn(|axis| visit.enter_position_m[axis] - goal[axis]))
 }

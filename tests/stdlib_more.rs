@@ -121,8 +121,14 @@ fn press_hold_learns_its_force_and_holds_it_two_seconds_on_a_lowered_table() {
     assert_eq!(
         truth.hold_s,
         Some(2.0),
-        "the skill's literal `dwell 2 s` is the demonstrated hold"
+        "the parameter's default is the demonstrated hold"
     );
+    let default_hold = skill
+        .params
+        .iter()
+        .find(|p| p.name == "hold")
+        .expect("a `hold` parameter");
+    assert_eq!(default_hold.value_si, 2.0);
 
     let (report, log, metrics) = run(&skill, &learned, &["table.z=0.225"]);
     assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);

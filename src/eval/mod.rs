@@ -175,6 +175,11 @@ pub struct Variant {
     /// Scene overrides, `KEY=VALUE`.
     #[serde(default)]
     pub set: Vec<String>,
+    /// Skill parameters for this variant, as `--param` takes them (`["hold=4s"]`), after the
+    /// skill's own `params`: the skill is compiled again with them and runs with the features
+    /// learned once (parameters change nothing learned).
+    #[serde(default)]
+    pub params: Vec<String>,
 }
 
 /// One trial's result (an entry of `summary.json`'s `trials`).
@@ -237,6 +242,8 @@ struct Prepared {
     base_dir: PathBuf,
     /// The robot `--robot` puts into every scene.
     swap: Option<std::sync::Arc<robot::Swap>>,
+    /// The command line's `--param` settings.
+    command_line: Vec<String>,
 }
 
 /// One trial to run.
@@ -367,6 +374,7 @@ fn prepare(spec: SkillTrials, base_dir: &Path, command_line: &[String]) -> Prepa
         spec,
         base_dir: base_dir.to_path_buf(),
         swap: None,
+        command_line: command_line.to_vec(),
     }
 }
 
@@ -420,8 +428,33 @@ fn run_job(
         },
         log: RunLog::default(),
     };
+    let (specialised, variant_bound);
     let (bound, plan) = match bound {
-        Ok(parts) => parts,
+        Ok(parts) if variant.params.is_empty() => (&parts.0, &parts.1),
+        Ok(_) => {
+            // The variant sets parameters: compile the skill with them and bind the features
+            // learned once.
+            let Ok((_, learned)) = &prepared.program_skill else {
+                return failed("the skill did not learn".to_string());
+            };
+            let mut params = prepared.spec.params.clone();
+            params.extend(variant.params.iter().cloned());
+            let file = prepared.base_dir.join(&prepared.spec.file);
+            specialised = match skill_with_params(&file, prepared.spec.name.as_deref(), &params, &prepared.command_line)
+            {
+                Ok(skill) => skill,
+                Err(Failure::Input(message) | Failure::Usage(message)) => return failed(message),
+                Err(Failure::Closed) => return failed("standard output closed".to_string()),
+            };
+            variant_bound = match bind(&specialised, learned) {
+                Ok(bound) => {
+                    let plan = ContactPlan::of(&bound);
+                    (bound, plan)
+                }
+                Err(err) => return failed(err.to_string()),
+            };
+            (&variant_bound.0, &variant_bound.1)
+        }
         Err(message) => return failed(message.clone()),
     };
     let scene_path = prepared.base_dir.join(&prepared.spec.scene);
@@ -813,6 +846,7 @@ fn run_draw(prepared: &Prepared, bound: &Bound<'_>, base: &SweepBase, index: usi
     let variant = Variant {
         name: format!("draw #{index}"),
         set: sets.as_ref().cloned().unwrap_or_default(),
+        params: Vec::new(),
     };
     let mut outcome = match (&sets, bound) {
         (Err(message), _) => run_job(prepared, &Err(message.clone()), &variant, false, &args.limits),

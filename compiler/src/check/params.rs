@@ -143,13 +143,8 @@ impl Checker<'_> {
                 taken.insert(&name.name, (name.clone(), decl.kind.keyword()));
             }
         }
-        for state in &skill.states {
-            let kind = match state.body {
-                StateBody::Active(_) => "state",
-                StateBody::Terminal { .. } => "terminal state",
-            };
-            taken.insert(&state.name.name, (state.name.clone(), kind));
-        }
+        // States are named only where a state is expected (`-> NAME`), never where a value is:
+        // a parameter may share a state's name.
         let mut bound: Vec<Bound<'s>> = Vec::new();
         for decl in &skill.params {
             let name = &decl.name;

@@ -2,9 +2,11 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::exp::exp_in_place;
+
 /// Bases whose log-value lies more than this below the largest one are treated as zero
 /// (relative weight below `exp(−25)` ≈ `1.4e-11`).
-const LOG_CUTOFF: f64 = 25.0;
+pub(crate) const LOG_CUTOFF: f64 = 25.0;
 
 /// The Gaussian bases `ψᵢ(s) = exp(−hᵢ (s − cᵢ)²)` of a DMP (see the [module docs](super)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -90,9 +92,10 @@ impl Basis {
         let log_value = |i: usize| -self.widths[i] * (s - self.centers[i]).powi(2);
         let centre = (u.round().max(0.0) as usize).min(n - 1);
         // Values are scaled relative to the basis nearest in time, which is within a factor
-        // `exp(width_factor / 4)` of the largest one: no underflow, and a single pass.
+        // `exp(width_factor / 4)` of the largest one: no underflow, and a single pass. The
+        // window's log-values are found first and exponentiated together (vectorised).
         let log_scale = log_value(centre);
-        out[centre] = 1.0;
+        out[centre] = 0.0;
         let mut first = centre;
         while first > 0 {
             let value = log_value(first - 1) - log_scale;
@@ -100,7 +103,7 @@ impl Basis {
                 break;
             }
             first -= 1;
-            out[first] = value.exp();
+            out[first] = value;
         }
         let mut end = centre + 1;
         while end < n {
@@ -108,9 +111,10 @@ impl Basis {
             if value < -LOG_CUTOFF {
                 break;
             }
-            out[end] = value.exp();
+            out[end] = value;
             end += 1;
         }
+        exp_in_place(&mut out[first..end]);
         Window {
             first,
             len: end - first,

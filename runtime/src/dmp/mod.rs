@@ -32,6 +32,7 @@
 
 mod basis;
 mod canonical;
+mod exp;
 mod fit;
 mod force;
 mod quaternion;

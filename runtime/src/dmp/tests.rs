@@ -283,3 +283,120 @@ fn dmp_round_trips_through_json() {
     assert_eq!(rollout.position(), back.start.as_slice());
     assert!((back.tau_s - dmp.tau_s).abs() < 1e-12);
 }
+
+/// A deterministic generator for the random-data test (no dependency).
+fn uniform(state: &mut u64) -> f64 {
+    *state = state
+        .wrapping_mul(6_364_136_223_846_793_005)
+        .wrapping_add(1_442_695_040_888_963_407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The fit written the plain way: every basis at every sample through libm's `exp` (no
+/// cutoff), the derivatives by `fit::derivatives`, dense `Φ`, and the ridge normal equations
+/// or LWR's ratios.
+fn reference_weights(config: &DmpConfig, t_s: &[f64], channels: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let n = t_s.len();
+    let times: Vec<f64> = t_s.iter().map(|t| t - t_s[0]).collect();
+    let tau = times[n - 1];
+    let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
+    let nb = basis.len();
+    let phases: Vec<f64> = times.iter().map(|t| (-config.alpha_s * t / tau).exp()).collect();
+    let psi = |s: f64| -> Vec<f64> {
+        (0..nb)
+            .map(|i| (-basis.widths[i] * (s - basis.centers[i]).powi(2)).exp())
+            .collect()
+    };
+    let (k, d) = (config.stiffness, config.damping());
+    channels
+        .iter()
+        .map(|x| {
+            let (mut dx, mut ddx) = (vec![0.0; n], vec![0.0; n]);
+            super::fit::derivatives(&times, x, &mut dx, &mut ddx);
+            let (x0, g) = (x[0], x[n - 1]);
+            let f: Vec<f64> = (0..n)
+                .map(|t| (tau * tau * ddx[t] + d * tau * dx[t]) / k - (g - x[t]) + (g - x0) * phases[t])
+                .collect();
+            match config.regression {
+                Regression::Lwr => (0..nb)
+                    .map(|i| {
+                        let (mut num, mut den) = (0.0, 0.0);
+                        for (t, &s) in phases.iter().enumerate() {
+                            let p = psi(s)[i];
+                            num += p * s * f[t];
+                            den += p * s * s;
+                        }
+                        num / den
+                    })
+                    .collect(),
+                Regression::Ridge { lambda } => {
+                    let phi = nalgebra::DMatrix::from_fn(n, nb, |t, i| {
+                        let values = psi(phases[t]);
+                        values[i] * phases[t] / values.iter().sum::<f64>()
+                    });
+                    let mut gram = phi.transpose() * &phi;
+                    let trace = gram.trace();
+                    for i in 0..nb {
+                        gram[(i, i)] += (lambda + 1e-14) * trace / nb as f64;
+                    }
+                    let rhs = phi.transpose() * nalgebra::DVector::from_column_slice(&f);
+                    gram.cholesky()
+                        .expect("positive definite")
+                        .solve(&rhs)
+                        .as_slice()
+                        .to_vec()
+                }
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn fast_fit_agrees_with_the_plain_computation_on_random_data() {
+    // The fit evaluates only the bases above exp(−25) of the nearest one, in fixed lanes, with
+    // its own exp (within 2 ulp of libm's); the plain computation takes every basis.
+    let mut state = 15u64;
+    let mut worst: f64 = 0.0;
+    for case in 0..12 {
+        let n = 20 + (uniform(&mut state) * 1500.0) as usize;
+        let mut t = vec![0.3 * uniform(&mut state)];
+        for _ in 1..n {
+            let last = t[t.len() - 1];
+            t.push(last + 1e-3 * (0.2 + uniform(&mut state)));
+        }
+        let channels: Vec<Vec<f64>> = (0..1 + case % 3)
+            .map(|_| {
+                let mut x = 0.0;
+                (0..n)
+                    .map(|_| {
+                        x += 1e-3 * (uniform(&mut state) - 0.5);
+                        x
+                    })
+                    .collect()
+            })
+            .collect();
+        let config = DmpConfig {
+            n_basis: 2 + (uniform(&mut state) * 60.0) as usize,
+            width_factor: if case < 4 { 2.0 } else { 0.3 + 5.0 * uniform(&mut state) },
+            alpha_s: 0.5 + 6.0 * uniform(&mut state),
+            regression: if case % 2 == 0 {
+                Regression::Ridge { lambda: 1e-6 }
+            } else {
+                Regression::Lwr
+            },
+            ..DmpConfig::default()
+        };
+        let refs: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+        let fast = Dmp::fit(&config, &t, &refs).expect("valid");
+        let plain = reference_weights(&config, &t, &channels);
+        for (fast, plain) in fast.weights.iter().zip(&plain) {
+            let scale = plain.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+            for (a, b) in fast.iter().zip(plain) {
+                let difference = (a - b).abs() / scale;
+                worst = worst.max(difference);
+                assert!(difference < 1e-9, "case {case}: {a} vs {b} (scale {scale})");
+            }
+        }
+    }
+    eprintln!("largest difference from the plain fit: {worst:.1e} of the largest weight");
+}

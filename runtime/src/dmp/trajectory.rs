@@ -5,7 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use super::basis::Basis;
 use super::canonical::CanonicalSystem;
-use super::fit::{fit_weights, stencil_at};
+use super::exp::exp_in_place;
+use super::fit::{stencil_weights, WeightFit, BLOCK};
 use super::rollout::DmpRollout;
 use super::{check_times, DmpConfig, DmpError};
 
@@ -86,39 +87,108 @@ impl Dmp {
                 return Err(DmpError::NonFinite { what: "channel", index });
             }
         }
+        Self::fit_checked(config, t_s, channels.len(), |c, k| channels[c][k])
+    }
+
+    /// Learns a DMP from `D`-dimensional points (e.g. positions, forces) at times `t_s`.
+    pub fn fit_points<const D: usize>(
+        config: &DmpConfig,
+        t_s: &[f64],
+        points: &[SVector<f64, D>],
+    ) -> Result<Self, DmpError> {
+        config.validate()?;
+        check_times(t_s, "trajectory")?;
+        if D > 0 && points.len() != t_s.len() {
+            return Err(DmpError::LengthMismatch {
+                what: "channel",
+                expected: t_s.len(),
+                found: points.len(),
+            });
+        }
+        for axis in 0..D {
+            if let Some(index) = points.iter().position(|p| !p[axis].is_finite()) {
+                return Err(DmpError::NonFinite { what: "channel", index });
+            }
+        }
+        Self::fit_checked(config, t_s, D, |c, k| points[k][c])
+    }
+
+    /// The fit proper, on checked inputs: `value(c, k)` is channel `c` at sample `k`. One pass
+    /// over the samples for all channels: the stencil weights are computed once per sample and
+    /// each sample's forcing-term values go straight into the weight estimate (nothing is
+    /// stored per sample).
+    fn fit_checked(
+        config: &DmpConfig,
+        t_s: &[f64],
+        n_channels: usize,
+        value: impl Fn(usize, usize) -> f64,
+    ) -> Result<Self, DmpError> {
         let n = t_s.len();
         let t0 = t_s[0];
         let tau = t_s[n - 1] - t0;
-        let times: Vec<f64> = t_s.iter().map(|t| t - t0).collect();
-        let canonical = CanonicalSystem {
-            alpha_s: config.alpha_s,
-        };
-        let phases: Vec<f64> = times.iter().map(|&t| canonical.phase(t, tau)).collect();
-        let fractions: Vec<f64> = times.iter().map(|&t| t / tau).collect();
+        let alpha_s = config.alpha_s;
         let (k, d) = (config.stiffness, config.damping());
-        // One pass over the samples for all channels: the stencil weights are computed once per
-        // sample and no derivative arrays are stored.
-        let mut targets = vec![vec![0.0; n]; channels.len()];
-        let start: Vec<f64> = channels.iter().map(|channel| channel[0]).collect();
-        let goal: Vec<f64> = channels.iter().map(|channel| channel[n - 1]).collect();
-        let mut start_velocity = vec![0.0; channels.len()];
-        for idx in 0..n {
-            let (mid, w1, w2) = stencil_at(&times, idx);
-            let s = phases[idx];
-            for (c, (channel, target)) in channels.iter().zip(&mut targets).enumerate() {
-                let (a, b, e) = (channel[mid - 1], channel[mid], channel[mid + 1]);
-                let dx = w1[0] * a + w1[1] * b + w1[2] * e;
-                let ddx = w2[0] * a + w2[1] * b + w2[2] * e;
-                let (x0, g) = (start[c], goal[c]);
-                target[idx] = (tau * tau * ddx + d * tau * dx) / k - (g - channel[idx]) + (g - x0) * s;
-                if idx == 0 {
-                    start_velocity[c] = dx;
+        let start: Vec<f64> = (0..n_channels).map(|c| value(c, 0)).collect();
+        let goal: Vec<f64> = (0..n_channels).map(|c| value(c, n - 1)).collect();
+        let mut start_velocity = vec![0.0; n_channels];
+        let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
+        let mut fit = WeightFit::new(&basis, config.regression, n_channels);
+        // Per block: times (shifted to start at 0) and values with one neighbour either side,
+        // the stencil weights, phases, time fractions, and each channel's forcing-term targets.
+        let mut times = [0.0; BLOCK + 2];
+        let mut values = vec![[0.0; BLOCK + 2]; n_channels];
+        let mut targets = vec![[0.0; BLOCK]; n_channels];
+        let (mut w1, mut w2) = ([[0.0; 3]; BLOCK], [[0.0; 3]; BLOCK]);
+        let (mut phases, mut fractions) = ([0.0; BLOCK], [0.0; BLOCK]);
+        for block in (0..n).step_by(BLOCK) {
+            let len = BLOCK.min(n - block);
+            // Entry j is sample `block + j − 1` (clamped; the end samples are redone below).
+            let neighbour = |j: usize| (block + j).saturating_sub(1).min(n - 1);
+            for (j, time) in times[..len + 2].iter_mut().enumerate() {
+                *time = t_s[neighbour(j)] - t0;
+            }
+            for (c, row) in values.iter_mut().enumerate() {
+                for (j, x) in row[..len + 2].iter_mut().enumerate() {
+                    *x = value(c, neighbour(j));
                 }
             }
+            for j in 0..len {
+                (w1[j], w2[j]) = stencil_weights(times[j], times[j + 1], times[j + 2], times[j + 1]);
+                // The canonical system's phase `exp(−α_s t / τ)`, as `CanonicalSystem::phase`.
+                phases[j] = -alpha_s * times[j + 1] / tau;
+                fractions[j] = times[j + 1] / tau;
+            }
+            exp_in_place(&mut phases[..len]);
+            for ((row, target), (&x0, &g)) in values.iter().zip(&mut targets).zip(start.iter().zip(&goal)) {
+                for j in 0..len {
+                    let (a, b, e) = (row[j], row[j + 1], row[j + 2]);
+                    let dx = w1[j][0] * a + w1[j][1] * b + w1[j][2] * e;
+                    let ddx = w2[j][0] * a + w2[j][1] * b + w2[j][2] * e;
+                    target[j] = (tau * tau * ddx + d * tau * dx) / k - (g - b) + (g - x0) * phases[j];
+                }
+            }
+            // The first and last samples take the stencil of their inner neighbours.
+            for idx in [0, n - 1] {
+                if !(block..block + len).contains(&idx) {
+                    continue;
+                }
+                let (j, mid) = (idx - block, idx.clamp(1, n - 2));
+                let (a, b) = stencil_weights(t_s[mid - 1] - t0, t_s[mid] - t0, t_s[mid + 1] - t0, t_s[idx] - t0);
+                (w1[j], w2[j]) = (a, b);
+                for (c, target) in targets.iter_mut().enumerate() {
+                    let (a, b, e) = (value(c, mid - 1), value(c, mid), value(c, mid + 1));
+                    let dx = w1[j][0] * a + w1[j][1] * b + w1[j][2] * e;
+                    let ddx = w2[j][0] * a + w2[j][1] * b + w2[j][2] * e;
+                    let (x0, g) = (start[c], goal[c]);
+                    target[j] = (tau * tau * ddx + d * tau * dx) / k - (g - value(c, idx)) + (g - x0) * phases[j];
+                    if idx == 0 {
+                        start_velocity[c] = dx;
+                    }
+                }
+            }
+            fit.add_block(&phases[..len], &fractions[..len], &targets);
         }
-        let basis = Basis::new(config.n_basis, config.alpha_s, config.width_factor);
-        let target_refs: Vec<&[f64]> = targets.iter().map(Vec::as_slice).collect();
-        let weights = fit_weights(&basis, config.regression, &phases, &fractions, &target_refs)?;
+        let weights = fit.finish()?;
         Ok(Self {
             config: config.clone(),
             basis,
@@ -128,17 +198,6 @@ impl Dmp {
             weights,
             start_velocity,
         })
-    }
-
-    /// Learns a DMP from `D`-dimensional points (e.g. positions, forces) at times `t_s`.
-    pub fn fit_points<const D: usize>(
-        config: &DmpConfig,
-        t_s: &[f64],
-        points: &[SVector<f64, D>],
-    ) -> Result<Self, DmpError> {
-        let channels: Vec<Vec<f64>> = (0..D).map(|axis| points.iter().map(|p| p[axis]).collect()).collect();
-        let refs: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
-        Self::fit(config, t_s, &refs)
     }
 
     /// Checks internal consistency (channel counts, basis sizes, finite values), e.g. after

@@ -399,12 +399,19 @@ impl Tournament {
         self.tree[self.leaves + x].2
     }
 
+    /// Sets cluster `x`'s smallest owned pair and updates the winners above it, stopping at
+    /// the first node whose winner does not change (the nodes above it then cannot change).
     fn set(&mut self, x: usize, (dist, partner): (f64, u32)) {
         let mut node = self.leaves + x;
         self.tree[node] = (dist, x as u32, partner);
         while node > 1 {
             node /= 2;
-            self.tree[node] = Self::better(self.tree[2 * node], self.tree[2 * node + 1]);
+            let winner = Self::better(self.tree[2 * node], self.tree[2 * node + 1]);
+            let old = self.tree[node];
+            if winner.0.to_bits() == old.0.to_bits() && winner.1 == old.1 && winner.2 == old.2 {
+                break;
+            }
+            self.tree[node] = winner;
         }
     }
 

@@ -143,3 +143,32 @@ fn an_extend_in_a_state_without_move_moves_the_held_pose_until_contact() {
     assert!(down_m > 0.03, "moved {down_m} m down");
     assert!(report.visits.iter().any(|visit| visit.state == "settle"));
 }
+
+#[test]
+fn a_speed_guard_fires_at_the_first_tick_past_its_speed() {
+    let (skill, learned) = learn("tests/data/touch_speed_guard.skill", "touch");
+    let (report, log) = run(&skill, &learned, "table.toml", &[]);
+    assert_eq!(report.terminal.as_deref(), Some("too_fast"), "{}", report.message);
+    let ticks = ticks_in(&log, "approach");
+    // The tool point's speed from its logged positions (1 ms apart).
+    let speeds: Vec<f64> = ticks
+        .windows(2)
+        .map(|pair| {
+            let d: f64 = (0..3)
+                .map(|i| (pair[1].measured[i] - pair[0].measured[i]).powi(2))
+                .sum();
+            d.sqrt() / (pair[1].t_s - pair[0].t_s)
+        })
+        .collect();
+    let (last, before) = speeds.split_last().expect("the approach ran");
+    let fastest_before = before.iter().copied().fold(0.0, f64::max);
+    eprintln!(
+        "speed guard: fired at {:.1} mm/s after {:.3} s, fastest before {:.1} mm/s",
+        last * 1e3,
+        ticks.len() as f64 * 1e-3,
+        fastest_before * 1e3
+    );
+    // The guard reads the controller's twist, the positions differ by one tick's integration.
+    assert!(*last > 0.0078, "fired at {last} m/s");
+    assert!(fastest_before < 0.0081, "already {fastest_before} m/s before");
+}

@@ -351,6 +351,13 @@ pub enum GuardKind {
         /// The right-hand side: a threshold or force name, or a literal.
         rhs: Expr,
     },
+    /// `speed OP VALUE`: the tool point's measured speed.
+    Speed {
+        /// The comparison.
+        op: CmpOp,
+        /// The right-hand side: a speed.
+        rhs: Expr,
+    },
     /// `timeout 5 s` or `dwell 200 ms`.
     Timed {
         /// `true` for `timeout`.

@@ -410,6 +410,7 @@ pub fn guard(g: &Guard) -> String {
             op.as_str(),
             expr(rhs)
         ),
+        GuardKind::Speed { op, rhs } => format!("speed {} {}", op.as_str(), expr(rhs)),
         GuardKind::Timed { timeout, duration } => {
             format!("{} {}", if *timeout { "timeout" } else { "dwell" }, expr(duration))
         }

@@ -234,7 +234,12 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         }
         Rule::for_kw => "`for`",
         Rule::force_cmp | Rule::timed | Rule::timed_kw | Rule::reached => "a guard",
-        Rule::moved_cmp | Rule::moved_kw | Rule::magnitude_cmp | Rule::magnitude_kw => "a guard",
+        Rule::moved_cmp
+        | Rule::moved_kw
+        | Rule::magnitude_cmp
+        | Rule::magnitude_kw
+        | Rule::speed_cmp
+        | Rule::speed_kw => "a guard",
         Rule::cmp_op => "a comparison (`>=`, `>`, `<=`, `<`)",
         Rule::task_entry | Rule::step | Rule::fallback => "`step` or `fallback`",
         Rule::on_failure => "`on failure`",
@@ -705,6 +710,16 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
             let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
             Guard {
                 kind: GuardKind::Magnitude { moment, op, rhs },
+                span,
+            }
+        }
+        Rule::speed_cmp => {
+            let mut inner = pair.into_inner();
+            let _keyword = inner.next().expect("grammar: speed keyword");
+            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
+            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            Guard {
+                kind: GuardKind::Speed { op, rhs },
                 span,
             }
         }

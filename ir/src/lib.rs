@@ -28,6 +28,7 @@ use serde::{Deserialize, Serialize};
 ///   its motion (both optional: a version 2 file reads as a version 3 file without them).
 /// - 4: guards may be [`Guard::Moved`], [`Guard::MovedDistance`], [`Guard::ForceMagnitude`] and
 ///   [`Guard::MomentMagnitude`] (new variants only: a version 3 file reads as a version 4 file).
+///   Version 5 adds [`Guard::Speed`].
 /// - 5: a skill lists its [`Param`]s, a task step may carry the skill specialised with the
 ///   parameters it sets ([`Step::specialised`]) and may start at a pose an earlier step found
 ///   ([`Step::at`]) (all optional: a version 4 file reads as a version 5 file without them).
@@ -916,6 +917,13 @@ pub enum Guard {
         op: Comparison,
         /// The right-hand side \[m\].
         value_m: f64,
+    },
+    /// The tool point's measured linear speed compared with `value_mps`.
+    Speed {
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side \[m/s\].
+        value_mps: f64,
     },
     /// The length of the applied force \[N\] compared with a threshold (scaled by a task
     /// step's `force_scale` as [`Guard::Force`]'s is).

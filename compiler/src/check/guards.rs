@@ -109,6 +109,13 @@ impl Checker<'_> {
                     ir::Guard::ForceMagnitude { op, rhs: rhs? }
                 })
             }
+            GuardKind::Speed { op, rhs } => {
+                let value = self.quantity(rhs, Dim::Speed, "the speed")?;
+                Some(ir::Guard::Speed {
+                    op: comparison(*op),
+                    value_mps: value,
+                })
+            }
             GuardKind::Timed { timeout, duration } => {
                 let what = if *timeout { "the timeout" } else { "the dwell time" };
                 let value = self.quantity(duration, Dim::Time, what)?;
@@ -391,6 +398,7 @@ fn only_time(guard: &ast::Guard) -> bool {
         | GuardKind::Force { .. }
         | GuardKind::Moved { .. }
         | GuardKind::Magnitude { .. }
+        | GuardKind::Speed { .. }
         | GuardKind::ForceReached(_)
         | GuardKind::Named(_) => false,
     }
@@ -510,6 +518,7 @@ enum Measured {
     Distance,
     ForceMagnitude,
     MomentMagnitude,
+    Speed,
 }
 
 /// A comparison of a measured quantity with a literal: what, how, and the literal.
@@ -523,6 +532,7 @@ fn literal_bound(guard: &ir::Guard) -> Option<(Measured, ir::Comparison, f64)> {
         } => Some((Measured::Force(along), op, value)),
         ir::Guard::Moved { along, op, value } => Some((Measured::Moved(along), op, value)),
         ir::Guard::MovedDistance { op, value_m } => Some((Measured::Distance, op, value_m)),
+        ir::Guard::Speed { op, value_mps } => Some((Measured::Speed, op, value_mps)),
         ir::Guard::ForceMagnitude {
             op,
             rhs: Literal { value },
@@ -606,11 +616,12 @@ fn impossible_atom(guard: &ir::Guard, runs_dmp: bool, has_force_axes: bool) -> O
                 rhs: ir::Threshold::Literal { value },
             }
             | ir::Guard::MovedDistance { op, value_m: value }
+            | ir::Guard::Speed { op, value_mps: value }
                 if below_zero(*op, *value) =>
             {
                 return Some((
                     "a magnitude below zero",
-                    "a force's, moment's or movement's length is never negative; compare with a positive value",
+                    "a force's, moment's or movement's length, or a speed, is never negative; compare with a positive value",
                 ))
             }
             _ => {}

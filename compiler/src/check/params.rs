@@ -387,7 +387,10 @@ fn guard_exprs(guard: &mut ast::Guard, put: &mut dyn FnMut(&mut ast::Expr)) {
             guard_exprs(guard, put);
             put(duration);
         }
-        GuardKind::Force { rhs, .. } | GuardKind::Moved { rhs, .. } | GuardKind::Magnitude { rhs, .. } => put(rhs),
+        GuardKind::Force { rhs, .. }
+        | GuardKind::Moved { rhs, .. }
+        | GuardKind::Magnitude { rhs, .. }
+        | GuardKind::Speed { rhs, .. } => put(rhs),
         GuardKind::Timed { duration, .. } => put(duration),
         GuardKind::ForceReached(tolerance) => put(tolerance),
         GuardKind::Named(_) => {}

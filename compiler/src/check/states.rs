@@ -33,6 +33,7 @@ fn mentions_force(guard: &ast::Guard) -> bool {
         ast::GuardKind::Not(inner) | ast::GuardKind::Held { guard: inner, .. } => mentions_force(inner),
         ast::GuardKind::Force { .. } | ast::GuardKind::Magnitude { .. } => true,
         ast::GuardKind::Moved { .. }
+        | ast::GuardKind::Speed { .. }
         | ast::GuardKind::Timed { .. }
         | ast::GuardKind::ForceReached(_)
         | ast::GuardKind::Named(_) => false,

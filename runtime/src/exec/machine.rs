@@ -564,6 +564,9 @@ impl<'b, 'a> Machine<'b, 'a> {
             ir::Guard::MomentMagnitude { op, rhs } => {
                 op.holds(sensed.applied.fixed_rows::<3>(3).norm(), self.scaled_threshold(*rhs))
             }
+            ir::Guard::Speed { op, value_mps } => {
+                op.holds(rig.controller.state().twist.fixed_rows::<3>(0).norm(), *value_mps)
+            }
             ir::Guard::MotionDone => self.motion_done(t),
             ir::Guard::ForceReached { tolerance_n } => sensed.force_error_max.is_some_and(|e| e <= *tolerance_n),
             ir::Guard::Dwell { duration_s } | ir::Guard::Timeout { duration_s } => self.time_in_state(t) >= *duration_s,

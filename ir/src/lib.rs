@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 ///   its motion (both optional: a version 2 file reads as a version 3 file without them).
 /// - 4: guards may be [`Guard::Moved`], [`Guard::MovedDistance`], [`Guard::ForceMagnitude`] and
 ///   [`Guard::MomentMagnitude`] (new variants only: a version 3 file reads as a version 4 file).
-///   Version 5 adds [`Guard::Speed`].
+///   Version 5 adds [`Guard::Speed`] and [`Point::PeakForceIn`].
 /// - 5: a skill lists its [`Param`]s, a task step may carry the skill specialised with the
 ///   parameters it sets ([`Step::specialised`]) and may start at a pose an earlier step found
 ///   ([`Step::at`]) (all optional: a version 4 file reads as a version 5 file without them).
@@ -479,6 +479,8 @@ pub enum Point {
     End(SegmentIdx),
     /// The sample of largest force magnitude.
     PeakForce,
+    /// The sample of largest force magnitude within a segment (`peak_force(segment N)`).
+    PeakForceIn(SegmentIdx),
 }
 
 /// How a frame is obtained.

@@ -81,7 +81,9 @@ impl ContactPlan {
                 | ir::ForceSource::Dmp { segment, .. }
                 | ir::ForceSource::Magnitude { segment, .. } => Some(segment.index()),
                 ir::ForceSource::At { point, .. } => match point {
-                    ir::Point::End(segment) | ir::Point::Start(segment) => Some(segment.index()),
+                    ir::Point::End(segment) | ir::Point::Start(segment) | ir::Point::PeakForceIn(segment) => {
+                        Some(segment.index())
+                    }
                     ir::Point::PeakForce => None,
                 },
                 _ => None,

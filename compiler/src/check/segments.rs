@@ -372,7 +372,8 @@ impl Checker<'_> {
         self.point(expr, scope)
     }
 
-    /// A point of the demonstration: `peak_force`, `end(segment N)` or `start(segment N)`.
+    /// A point of the demonstration: `peak_force` (over the whole demonstration),
+    /// `peak_force(segment N)`, `end(segment N)` or `start(segment N)`.
     pub(super) fn point(&mut self, expr: &ast::Expr, scope: &mut SkillScope) -> Option<ir::Point> {
         let sig = match &expr.kind {
             ExprKind::Name(name) | ExprKind::Call { name, .. } => Signature::find(Produces::Point, &name.name),
@@ -380,6 +381,10 @@ impl Checker<'_> {
         };
         match (&expr.kind, sig) {
             (ExprKind::Name(_), Some(sig)) if sig.function == Function::PeakForce => return Some(ir::Point::PeakForce),
+            (ExprKind::Call { args, .. }, Some(sig)) if sig.function == Function::PeakForce => {
+                let args = self.bind(sig, expr.span, args);
+                return Some(ir::Point::PeakForceIn(self.required_segment(&args, scope)?));
+            }
             (ExprKind::Call { args, .. }, Some(sig)) if matches!(sig.function, Function::End | Function::Start) => {
                 let args = self.bind(sig, expr.span, args);
                 let segment = self.required_segment(&args, scope)?;
@@ -404,7 +409,9 @@ impl Checker<'_> {
                 "expected a point of the demonstration",
                 "not a point",
             )
-            .help(help.unwrap_or_else(|| "write `end(segment 1)`, `start(segment 2)` or `peak_force`".to_string()));
+            .help(help.unwrap_or_else(|| {
+                "write `end(segment 1)`, `start(segment 2)`, `peak_force` or `peak_force(segment 2)`".to_string()
+            }));
         self.report(diag);
         None
     }

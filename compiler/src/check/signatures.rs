@@ -121,7 +121,7 @@ pub(super) const LEARN_FUNCTIONS: &[Signature] = &[
     sig("count", P::Cut, F::Count, &["n"], 1, "count(3)"),
     sig("distance", P::Cut, F::Distance, &["d"], 1, "distance(2.5)"),
 
-    sig("peak_force", P::Point, F::PeakForce, &[], 0, "peak_force").aka(&["peak", "max_force_point"]),
+    sig("peak_force", P::Point, F::PeakForce, &["segment"], 1, "peak_force(segment 2)").aka(&["peak", "max_force_point"]),
     sig("end", P::Point, F::End, &["segment"], 1, "end(segment 1)"),
     sig("start", P::Point, F::Start, &["segment"], 1, "start(segment 1)"),
 

@@ -200,21 +200,28 @@ impl Learner<'_> {
         match point {
             ir::Point::Start(segment) => self.seg(segment).start,
             ir::Point::End(segment) => self.seg(segment).end - 1,
-            ir::Point::PeakForce => {
-                self.demo
-                    .force_n
-                    .iter()
-                    .enumerate()
-                    .fold((0, f64::NEG_INFINITY), |best, (k, f)| {
-                        if f.norm() > best.1 {
-                            (k, f.norm())
-                        } else {
-                            best
-                        }
-                    })
-                    .0
+            ir::Point::PeakForce => self.peak_sample(0, self.demo.force_n.len()),
+            ir::Point::PeakForceIn(segment) => {
+                let segment = self.seg(segment);
+                self.peak_sample(segment.start, segment.end)
             }
         }
+    }
+
+    /// The sample of largest force magnitude in `start..end` (the first of equals; `start` when
+    /// the range is empty).
+    fn peak_sample(&self, start: usize, end: usize) -> usize {
+        let end = end.min(self.demo.force_n.len());
+        (start..end)
+            .fold((start, f64::NEG_INFINITY), |best, k| {
+                let norm = self.demo.force_n[k].norm();
+                if norm > best.1 {
+                    (k, norm)
+                } else {
+                    best
+                }
+            })
+            .0
     }
 
     fn peak_n(&self) -> f64 {

@@ -172,3 +172,34 @@ fn a_speed_guard_fires_at_the_first_tick_past_its_speed() {
     assert!(*last > 0.0078, "fired at {last} m/s");
     assert!(fastest_before < 0.0081, "already {fastest_before} m/s before");
 }
+
+#[test]
+fn a_group_of_states_repeats_as_often_as_an_entered_guard_says() {
+    for taps in [3u32, 4] {
+        let setting = [format!("taps={taps}")];
+        let Ok((_, skill)) = skillc::load::load_skill_with(&root().join("tests/data/taps.skill"), None, &setting)
+        else {
+            panic!("taps.skill compiles")
+        };
+        let demo = root().join("examples/demos/double_tap.csv");
+        let Ok(learned) = skillc::load::learn_from_files(&skill, &demo, &LearnOptions::default()) else {
+            panic!("learns from the double tap")
+        };
+        let (report, _) = run(&skill, &learned, "table.toml", &[]);
+        assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+        let tapped = report.visits.iter().filter(|visit| visit.state == "tap").count();
+        let spots: Vec<[f64; 3]> = report
+            .visits
+            .iter()
+            .filter(|visit| visit.state == "tap")
+            .map(|visit| visit.enter_position_m)
+            .collect();
+        eprintln!("taps={taps}: tapped {tapped} times at {spots:?}");
+        assert_eq!(tapped, taps as usize);
+        // Each tap is a hop away from the last, on the surface.
+        for pair in spots.windows(2) {
+            let hop: f64 = (0..3).map(|i| (pair[1][i] - pair[0][i]).powi(2)).sum::<f64>().sqrt();
+            assert!(hop > 0.02, "hop of {hop} m");
+        }
+    }
+}

@@ -351,6 +351,15 @@ pub enum GuardKind {
         /// The right-hand side: a threshold or force name, or a literal.
         rhs: Expr,
     },
+    /// `entered(STATE) OP COUNT`: how many times the run has entered a state.
+    Entered {
+        /// The state counted.
+        state: Ident,
+        /// The comparison.
+        op: CmpOp,
+        /// The right-hand side: a count.
+        rhs: Expr,
+    },
     /// `speed OP VALUE`: the tool point's measured speed.
     Speed {
         /// The comparison.

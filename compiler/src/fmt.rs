@@ -411,6 +411,7 @@ pub fn guard(g: &Guard) -> String {
             expr(rhs)
         ),
         GuardKind::Speed { op, rhs } => format!("speed {} {}", op.as_str(), expr(rhs)),
+        GuardKind::Entered { state, op, rhs } => format!("entered({}) {} {}", state.name, op.as_str(), expr(rhs)),
         GuardKind::Timed { timeout, duration } => {
             format!("{} {}", if *timeout { "timeout" } else { "dwell" }, expr(duration))
         }

@@ -239,7 +239,9 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         | Rule::magnitude_cmp
         | Rule::magnitude_kw
         | Rule::speed_cmp
-        | Rule::speed_kw => "a guard",
+        | Rule::speed_kw
+        | Rule::entered_cmp
+        | Rule::entered_kw => "a guard",
         Rule::cmp_op => "a comparison (`>=`, `>`, `<=`, `<`)",
         Rule::task_entry | Rule::step | Rule::fallback => "`step` or `fallback`",
         Rule::on_failure => "`on failure`",
@@ -710,6 +712,17 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
             let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
             Guard {
                 kind: GuardKind::Magnitude { moment, op, rhs },
+                span,
+            }
+        }
+        Rule::entered_cmp => {
+            let mut inner = pair.into_inner();
+            let _keyword = inner.next().expect("grammar: entered keyword");
+            let state = ident(inner.next().expect("grammar: entered names a state"));
+            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
+            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            Guard {
+                kind: GuardKind::Entered { state, op, rhs },
                 span,
             }
         }

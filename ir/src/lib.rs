@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 ///   its motion (both optional: a version 2 file reads as a version 3 file without them).
 /// - 4: guards may be [`Guard::Moved`], [`Guard::MovedDistance`], [`Guard::ForceMagnitude`] and
 ///   [`Guard::MomentMagnitude`] (new variants only: a version 3 file reads as a version 4 file).
-///   Version 5 adds [`Guard::Speed`] and [`Point::PeakForceIn`].
+///   Version 5 adds [`Guard::Speed`], [`Guard::Entered`] and [`Point::PeakForceIn`].
 /// - 5: a skill lists its [`Param`]s, a task step may carry the skill specialised with the
 ///   parameters it sets ([`Step::specialised`]) and may start at a pose an earlier step found
 ///   ([`Step::at`]) (all optional: a version 4 file reads as a version 5 file without them).
@@ -919,6 +919,17 @@ pub enum Guard {
         op: Comparison,
         /// The right-hand side \[m\].
         value_m: f64,
+    },
+    /// How many times the run has entered `state` (the current state's entry included)
+    /// compared with `count`: `entered(tap) >= 2` repeats a group of states a set number of
+    /// times.
+    Entered {
+        /// The state counted.
+        state: StateId,
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side.
+        count: u32,
     },
     /// The tool point's measured linear speed compared with `value_mps`.
     Speed {

@@ -109,6 +109,29 @@ impl Checker<'_> {
                     ir::Guard::ForceMagnitude { op, rhs: rhs? }
                 })
             }
+            GuardKind::Entered { state, op, rhs } => {
+                let count = self.count(rhs, "the number of entries");
+                let Some(&id) = scope.state_ids.get(&state.name) else {
+                    let names: Vec<&str> = scope.state_names.iter().map(String::as_str).collect();
+                    let help = suggest(&state.name, names.iter().copied())
+                        .unwrap_or_else(|| format!("states: {}", super::join_ticked(&names)));
+                    let diag = self
+                        .diag(
+                            Code::UnknownName,
+                            state.span,
+                            format!("unknown state `{}`", state.name),
+                            "no such state",
+                        )
+                        .help(help);
+                    self.report(diag);
+                    return None;
+                };
+                Some(ir::Guard::Entered {
+                    state: ir::StateId(id),
+                    op: comparison(*op),
+                    count: count?,
+                })
+            }
             GuardKind::Speed { op, rhs } => {
                 let value = self.quantity(rhs, Dim::Speed, "the speed")?;
                 Some(ir::Guard::Speed {
@@ -399,6 +422,7 @@ fn only_time(guard: &ast::Guard) -> bool {
         | GuardKind::Moved { .. }
         | GuardKind::Magnitude { .. }
         | GuardKind::Speed { .. }
+        | GuardKind::Entered { .. }
         | GuardKind::ForceReached(_)
         | GuardKind::Named(_) => false,
     }
@@ -519,6 +543,7 @@ enum Measured {
     ForceMagnitude,
     MomentMagnitude,
     Speed,
+    Entered(ir::StateId),
 }
 
 /// A comparison of a measured quantity with a literal: what, how, and the literal.
@@ -533,6 +558,7 @@ fn literal_bound(guard: &ir::Guard) -> Option<(Measured, ir::Comparison, f64)> {
         ir::Guard::Moved { along, op, value } => Some((Measured::Moved(along), op, value)),
         ir::Guard::MovedDistance { op, value_m } => Some((Measured::Distance, op, value_m)),
         ir::Guard::Speed { op, value_mps } => Some((Measured::Speed, op, value_mps)),
+        ir::Guard::Entered { state, op, count } => Some((Measured::Entered(state), op, f64::from(count))),
         ir::Guard::ForceMagnitude {
             op,
             rhs: Literal { value },

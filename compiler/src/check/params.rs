@@ -390,7 +390,8 @@ fn guard_exprs(guard: &mut ast::Guard, put: &mut dyn FnMut(&mut ast::Expr)) {
         GuardKind::Force { rhs, .. }
         | GuardKind::Moved { rhs, .. }
         | GuardKind::Magnitude { rhs, .. }
-        | GuardKind::Speed { rhs, .. } => put(rhs),
+        | GuardKind::Speed { rhs, .. }
+        | GuardKind::Entered { rhs, .. } => put(rhs),
         GuardKind::Timed { duration, .. } => put(duration),
         GuardKind::ForceReached(tolerance) => put(tolerance),
         GuardKind::Named(_) => {}

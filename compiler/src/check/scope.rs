@@ -51,6 +51,10 @@ pub(super) struct SkillScope {
     pub(super) force_sources: Vec<ir::ForceSource>,
     /// The orientation (`[w, x, y, z]`, base frame) of each literal `fixed(...)` frame, by id.
     pub(super) fixed_frames: HashMap<u32, [f64; 4]>,
+    /// Every state's id by name (for `entered(STATE)`).
+    pub(super) state_ids: HashMap<String, u32>,
+    /// The states' names in order.
+    pub(super) state_names: Vec<String>,
 }
 
 impl Checker<'_> {

@@ -34,6 +34,7 @@ fn mentions_force(guard: &ast::Guard) -> bool {
         ast::GuardKind::Force { .. } | ast::GuardKind::Magnitude { .. } => true,
         ast::GuardKind::Moved { .. }
         | ast::GuardKind::Speed { .. }
+        | ast::GuardKind::Entered { .. }
         | ast::GuardKind::Timed { .. }
         | ast::GuardKind::ForceReached(_)
         | ast::GuardKind::Named(_) => false,
@@ -73,6 +74,8 @@ impl Checker<'_> {
             return (Vec::new(), Vec::new(), None);
         }
         let state_names: Vec<&str> = unique.iter().map(|s| s.name.name.as_str()).collect();
+        scope.state_ids = ids.iter().map(|(name, (id, _))| (name.to_string(), id.0)).collect();
+        scope.state_names = state_names.iter().map(|name| name.to_string()).collect();
 
         let mut states = Vec::new();
         let mut transitions = Vec::new();

@@ -92,6 +92,8 @@ pub(super) struct Machine<'b, 'a> {
     /// Whether each guard of the active state holds this tick (a buffer kept between ticks so
     /// that choosing allocates nothing).
     guard_holds: Vec<bool>,
+    /// How many times each state has been entered in this run (`entered(STATE)` guards).
+    entries: Vec<u32>,
 }
 
 /// Where a held guard (`G for D`) sits: the index of its transition and its place in a
@@ -296,6 +298,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             clock_rate: 1.0,
             hold_timers: HeldTimers::default(),
             guard_holds: Vec::new(),
+            entries: vec![0; skill.states.len()],
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -324,6 +327,9 @@ impl<'b, 'a> Machine<'b, 'a> {
             .active()
             .is_some_and(|active| active.position_controlled.contains(&false));
         self.state = state;
+        if let Some(count) = self.entries.get_mut(state.index()) {
+            *count = count.saturating_add(1);
+        }
         self.entered_s = t;
         self.extension = None;
         self.motion = None;
@@ -563,6 +569,10 @@ impl<'b, 'a> Machine<'b, 'a> {
             }
             ir::Guard::MomentMagnitude { op, rhs } => {
                 op.holds(sensed.applied.fixed_rows::<3>(3).norm(), self.scaled_threshold(*rhs))
+            }
+            ir::Guard::Entered { state, op, count } => {
+                let entries = self.entries.get(state.index()).copied().unwrap_or(0);
+                op.holds(f64::from(entries), f64::from(*count))
             }
             ir::Guard::Speed { op, value_mps } => {
                 op.holds(rig.controller.state().twist.fixed_rows::<3>(0).norm(), *value_mps)

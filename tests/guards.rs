@@ -203,3 +203,30 @@ fn a_group_of_states_repeats_as_often_as_an_entered_guard_says() {
         }
     }
 }
+
+#[test]
+fn what_an_extension_found_moves_the_goals_of_later_motions() {
+    let (skill, learned) = learn("tests/data/touch_absolute_return.skill", "touch");
+    let end_z = |sets: &[&str]| {
+        let (report, log) = run(&skill, &learned, "table.toml", sets);
+        assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+        let last = log.ticks.last().expect("ticks");
+        // The approach's extension: the contact's height below the demonstrated goal.
+        let settle = ticks_in(&log, "settle");
+        (last.measured[2], settle.first().expect("settled").measured[2])
+    };
+    let (end_demo, contact_demo) = end_z(&[]);
+    let (end_lower, contact_lower) = end_z(&["table.z=0.225"]);
+    let found = contact_demo - contact_lower;
+    eprintln!(
+        "table 5 cm lower: contact {:.1} mm lower, return ends {:.1} mm lower",
+        found * 1e3,
+        (end_demo - end_lower) * 1e3
+    );
+    assert!((found - 0.05).abs() < 0.005, "found {found} m");
+    assert!(
+        ((end_demo - end_lower) - found).abs() < 0.003,
+        "ends {} m lower",
+        end_demo - end_lower
+    );
+}

@@ -53,6 +53,9 @@ struct Extension {
     max_m: f64,
     done_m: f64,
     exhausted_at_s: Option<f64>,
+    /// The tool point when the extension began (base frame): how far the tool itself travelled
+    /// along the axis is what the extension found (the goal leads the compliant tool).
+    from_tool: Vector3<f64>,
 }
 
 /// The state of the machine between ticks.
@@ -94,6 +97,10 @@ pub(super) struct Machine<'b, 'a> {
     guard_holds: Vec<bool>,
     /// How many times each state has been entered in this run (`entered(STATE)` guards).
     entries: Vec<u32>,
+    /// How far the tool travelled during goal extensions of earlier states (base frame, along
+    /// each extension's axis): the surface or button they found is that much farther than
+    /// demonstrated, so later motions that are not `relative` move their goals by it too.
+    found_offset: Vector3<f64>,
 }
 
 /// Where a held guard (`G for D`) sits: the index of its transition and its place in a
@@ -299,6 +306,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             hold_timers: HeldTimers::default(),
             guard_holds: Vec::new(),
             entries: vec![0; skill.states.len()],
+            found_offset: Vector3::zeros(),
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -326,6 +334,12 @@ impl<'b, 'a> Machine<'b, 'a> {
         let was_forcing = self
             .active()
             .is_some_and(|active| active.position_controlled.contains(&false));
+        if let Some(extension) = &self.extension {
+            let travelled = extension
+                .axis
+                .dot(&(rig.tool().translation.vector - extension.from_tool));
+            self.found_offset += extension.axis * travelled.clamp(0.0, extension.done_m);
+        }
         self.state = state;
         if let Some(count) = self.entries.get_mut(state.index()) {
             *count = count.saturating_add(1);
@@ -386,11 +400,12 @@ impl<'b, 'a> Machine<'b, 'a> {
             let max_speed = rig.limits().tool_speed_mps;
             // `move M relative`: the goal moves by the offset of the entry pose from the
             // motion's demonstrated start. A task step's `goal_offset` is not added again: the
-            // entry pose carries it already (the state began where the offset goals led).
+            // entry pose carries it already (the state began where the offset goals led). Other
+            // motions move by the step's offset and by what earlier extensions found.
             let offset = if active.motion_relative {
                 flange.translation.vector - motion_start(learned).translation.vector
             } else {
-                Vector3::from(self.overrides.goal_offset_m)
+                Vector3::from(self.overrides.goal_offset_m) + self.found_offset
             };
             let rollout = MotionRollout::start(learned.piece(0), &flange, offset.into(), speed, max_speed, lever)
                 .map_err(|err| self.motion_error(&self.skill().learn.motions[motion_id.index()].name, &err))?;
@@ -637,6 +652,7 @@ impl<'b, 'a> Machine<'b, 'a> {
                                 max_m: *max_m,
                                 done_m: 0.0,
                                 exhausted_at_s: None,
+                                from_tool: rig.tool().translation.vector,
                             });
                             break;
                         }

@@ -685,8 +685,7 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
         Rule::force_cmp => {
             let mut inner = pair.into_inner();
             let axis = axis_ref(inner.next().expect("grammar: force() has an axis"));
-            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
-            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            let (op, rhs) = comparison(&mut inner);
             Guard {
                 kind: GuardKind::Force { axis, op, rhs },
                 span,
@@ -698,8 +697,7 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
                 Some(Rule::axis_ref) => Some(axis_ref(inner.next().expect("peeked"))),
                 _ => None,
             };
-            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
-            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            let (op, rhs) = comparison(&mut inner);
             Guard {
                 kind: GuardKind::Moved { axis, op, rhs },
                 span,
@@ -708,8 +706,7 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
         Rule::magnitude_cmp => {
             let mut inner = pair.into_inner();
             let moment = inner.next().expect("grammar: magnitude keyword").as_str() == "moment_magnitude";
-            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
-            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            let (op, rhs) = comparison(&mut inner);
             Guard {
                 kind: GuardKind::Magnitude { moment, op, rhs },
                 span,
@@ -719,8 +716,7 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
             let mut inner = pair.into_inner();
             let _keyword = inner.next().expect("grammar: entered keyword");
             let state = ident(inner.next().expect("grammar: entered names a state"));
-            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
-            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            let (op, rhs) = comparison(&mut inner);
             Guard {
                 kind: GuardKind::Entered { state, op, rhs },
                 span,
@@ -729,8 +725,7 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
         Rule::speed_cmp => {
             let mut inner = pair.into_inner();
             let _keyword = inner.next().expect("grammar: speed keyword");
-            let op = cmp_op(inner.next().expect("grammar: comparison operator"));
-            let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+            let (op, rhs) = comparison(&mut inner);
             Guard {
                 kind: GuardKind::Speed { op, rhs },
                 span,
@@ -882,6 +877,13 @@ fn string(pair: Pair<'_, Rule>) -> String {
         }
     }
     out
+}
+
+/// The operator and right-hand side that end every comparison guard (`>= 6 mm`).
+fn comparison<'i>(inner: &mut impl Iterator<Item = Pair<'i, Rule>>) -> (CmpOp, Expr) {
+    let op = cmp_op(inner.next().expect("grammar: comparison operator"));
+    let rhs = expr(inner.next().expect("grammar: comparison has a right-hand side"));
+    (op, rhs)
 }
 
 fn expr(pair: Pair<'_, Rule>) -> Expr {

@@ -52,8 +52,14 @@ fn a_relative_return_keeps_the_demonstrated_shape_from_where_it_starts() {
     }
     let ((entry_demo, end_demo), (entry_abs, end_abs), (entry_rel, end_rel)) = (ends[0], ends[1], ends[2]);
     // Both returns on the lowered table start on it, 3 cm below the demonstrated contact.
-    assert!((entry_abs[2] - entry_rel[2]).abs() < 1e-3, "{entry_abs:?} vs {entry_rel:?}");
-    assert!(((entry_demo[2] - entry_abs[2]) - 0.03).abs() < 2e-3, "{entry_demo:?} vs {entry_abs:?}");
+    assert!(
+        (entry_abs[2] - entry_rel[2]).abs() < 1e-3,
+        "{entry_abs:?} vs {entry_rel:?}"
+    );
+    assert!(
+        ((entry_demo[2] - entry_abs[2]) - 0.03).abs() < 2e-3,
+        "{entry_demo:?} vs {entry_abs:?}"
+    );
     // Both end 3 cm below the demonstrated return's end (within the 1-2 mm the contacts and the
     // final tracking differ by), the same in x and y.
     for (name, end) in [("default", end_abs), ("relative", end_rel)] {

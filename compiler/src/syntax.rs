@@ -333,6 +333,18 @@ fn skill(pair: Pair<'_, Rule>) -> Skill {
 }
 
 fn param_decl(pair: Pair<'_, Rule>) -> ParamDecl {
+    let (doc, name, value) = named_value(pair, "a parameter");
+    ParamDecl {
+        doc,
+        span: name.span.to(value.span),
+        name,
+        value,
+    }
+}
+
+/// The doc comment, name and value of `NAME = VALUE` or `NAME: VALUE` (a parameter, a limit);
+/// `what` names it in the grammar's invariants.
+fn named_value(pair: Pair<'_, Rule>, what: &str) -> (Vec<String>, Ident, Expr) {
     let mut doc = Vec::new();
     let mut name = None;
     let mut value = None;
@@ -340,18 +352,13 @@ fn param_decl(pair: Pair<'_, Rule>) -> ParamDecl {
         match inner.as_rule() {
             Rule::doc => doc.push(doc_text(inner)),
             Rule::param_kw => {}
-            Rule::ident if name.is_none() => name = Some(ident(inner)),
+            Rule::ident | Rule::key if name.is_none() => name = Some(ident(inner)),
             _ => value = Some(expr(inner)),
         }
     }
-    let name = name.expect("grammar: a parameter has a name");
-    let value = value.expect("grammar: a parameter has a value");
-    ParamDecl {
-        doc,
-        span: name.span.to(value.span),
-        name,
-        value,
-    }
+    let name = name.unwrap_or_else(|| panic!("grammar: {what} has a name"));
+    let value = value.unwrap_or_else(|| panic!("grammar: {what} has a value"));
+    (doc, name, value)
 }
 
 /// Parses `NAME=VALUE` as given to `--param` (`hold=5s`, `hold=5 s`, `strokes=6`). The spans
@@ -433,18 +440,7 @@ fn learn_entry(pair: Pair<'_, Rule>) -> LearnDecl {
 }
 
 fn limit_entry(pair: Pair<'_, Rule>) -> LimitEntry {
-    let mut doc = Vec::new();
-    let mut name = None;
-    let mut value = None;
-    for inner in pair.into_inner() {
-        match inner.as_rule() {
-            Rule::doc => doc.push(doc_text(inner)),
-            Rule::key => name = Some(ident(inner)),
-            _ => value = Some(expr(inner)),
-        }
-    }
-    let name = name.expect("grammar: a limit has a name");
-    let value = value.expect("grammar: a limit has a value");
+    let (doc, name, value) = named_value(pair, "a limit");
     // Like a learn declaration's, the span starts after the doc comment.
     LimitEntry {
         doc,

@@ -68,6 +68,14 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../examples/scenes/workcell.toml"),
     ),
     (
+        "examples/tasks/find_wipe_hold.skill",
+        include_str!("../examples/tasks/find_wipe_hold.skill"),
+    ),
+    (
+        "examples/tasks/inspect_and_press.skill",
+        include_str!("../examples/tasks/inspect_and_press.skill"),
+    ),
+    (
         "examples/robots/lwr4.urdf",
         include_str!("../examples/robots/lwr4.urdf"),
     ),
@@ -181,21 +189,45 @@ mod tests {
     fn the_defaults_hold_every_file_the_default_trials_name() {
         let trials: toml::Table = FILES[0].1.parse().expect("default trials");
         let skills = trials["skill"].as_array().expect("skills");
+        let normal = |path: PathBuf| -> String {
+            let normal: PathBuf = path.components().fold(PathBuf::new(), |mut acc, c| {
+                match c {
+                    std::path::Component::ParentDir => {
+                        acc.pop();
+                    }
+                    other => acc.push(other),
+                }
+                acc
+            });
+            normal.to_string_lossy().replace('\\', "/")
+        };
+        let built_in = |name: &str| assert!(FILES.iter().any(|(p, _)| *p == name), "`{name}` is not built in");
+        // A task's file, its imports and its steps' demonstrations, relative to the task file.
+        for task in trials["task"].as_array().expect("tasks") {
+            let file = normal(Path::new("examples/eval").join(task["file"].as_str().expect("file")));
+            built_in(&file);
+            built_in(&normal(
+                Path::new("examples/eval").join(task["scene"].as_str().expect("scene")),
+            ));
+            let dir = Path::new(&file).parent().expect("folder").to_path_buf();
+            let text = FILES.iter().find(|(p, _)| *p == file).expect("built in").1;
+            for quoted in text.split('"').skip(1).step_by(2) {
+                let name = normal(dir.join(quoted));
+                if quoted.ends_with(".skill") {
+                    built_in(&name);
+                } else if let Some(stem) = quoted.strip_suffix(".csv") {
+                    let stem = Path::new(stem).file_name().and_then(|s| s.to_str()).expect("stem");
+                    assert!(
+                        StdSkill::ALL.iter().any(|s| s.name() == stem),
+                        "demo `{quoted}` is not generated"
+                    );
+                }
+            }
+        }
         for skill in skills {
             for key in ["file", "scene"] {
                 let relative = skill[key].as_str().expect("path");
-                let path = Path::new("examples/eval").join(relative);
-                let normal: PathBuf = path.components().fold(PathBuf::new(), |mut acc, c| {
-                    match c {
-                        std::path::Component::ParentDir => {
-                            acc.pop();
-                        }
-                        other => acc.push(other),
-                    }
-                    acc
-                });
-                let name = normal.to_string_lossy().replace('\\', "/");
-                assert!(FILES.iter().any(|(p, _)| *p == name), "`{name}` is not built in");
+                built_in(&normal(Path::new("examples/eval").join(relative)));
             }
             let demo = skill["demo"].as_str().expect("demo");
             let stem = Path::new(demo).file_stem().and_then(|s| s.to_str()).expect("stem");

@@ -62,12 +62,9 @@ pub fn load_skill(path: &Path, name: Option<&str>) -> Result<(skill_ir::Program,
     load_skill_with(path, name, &[])
 }
 
-/// [`load_skill`] with `--param NAME=VALUE` settings.
-pub fn load_skill_with(
-    path: &Path,
-    name: Option<&str>,
-    params: &[String],
-) -> Result<(skill_ir::Program, skill_ir::Skill), Failure> {
+/// Compiles a `.skill` file (skills, tasks, imports) with `--param` settings; the compiler's
+/// diagnostics as the error when it does not compile.
+pub fn load_program_with(path: &Path, params: &[String]) -> Result<skill_ir::Program, Failure> {
     let compilation = frontend::compile_path_with(path, params).map_err(|err| Failure::Usage(err.to_string()))?;
     let Some(program) = compilation.program.clone() else {
         let mut text = String::new();
@@ -83,6 +80,16 @@ pub fn load_skill_with(
             text.trim_end()
         )));
     };
+    Ok(program)
+}
+
+/// [`load_skill`] with `--param NAME=VALUE` settings.
+pub fn load_skill_with(
+    path: &Path,
+    name: Option<&str>,
+    params: &[String],
+) -> Result<(skill_ir::Program, skill_ir::Skill), Failure> {
+    let program = load_program_with(path, params)?;
     let skill = match name {
         Some(name) => program.skill(name).cloned().ok_or_else(|| {
             let names: Vec<&str> = program.skills.iter().map(|s| s.name.as_str()).collect();

@@ -7,6 +7,7 @@ pub mod real;
 mod report;
 pub mod robot;
 pub mod sweep;
+pub mod tasks;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -113,8 +114,11 @@ fn parse_rate(text: &str) -> Result<f64, String> {
 #[serde(deny_unknown_fields)]
 pub struct TrialsFile {
     /// One entry per skill.
-    #[serde(rename = "skill")]
+    #[serde(rename = "skill", default)]
     pub skills: Vec<SkillTrials>,
+    /// One entry per task.
+    #[serde(rename = "task", default)]
+    pub tasks: Vec<tasks::TaskTrials>,
 }
 
 /// The trials of one skill.
@@ -164,7 +168,7 @@ pub struct Criteria {
 pub const DEFAULT_PEAK_BOUND: [f64; 2] = [2.0, 5.0];
 
 /// The version of `summary.json`'s layout; bumped on every change to its keys.
-pub const SUMMARY_VERSION: u32 = 3;
+pub const SUMMARY_VERSION: u32 = 4;
 
 /// A scene variant.
 #[derive(Debug, Clone, Deserialize)]
@@ -230,6 +234,9 @@ pub struct TrialResult {
     /// The scene overrides of the trial (`skillc run --no-prepose --set ...` repeats it).
     #[serde(default)]
     pub set: Vec<String>,
+    /// A task trial's steps, in order (then any fallback that ran); empty for skill trials.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub steps: Vec<tasks::StepResult>,
 }
 
 /// A learned skill ready for trials (it binds), or why it is not.
@@ -247,10 +254,11 @@ struct Prepared {
 }
 
 /// One trial to run.
-struct Job {
-    skill: usize,
-    variant: usize,
-    replay: bool,
+enum Job {
+    /// A skill's variant, or its replay.
+    Skill { skill: usize, variant: usize, replay: bool },
+    /// A task's variant.
+    Task { task: usize, variant: usize },
 }
 
 /// One draw of a sweep to run.
@@ -263,8 +271,10 @@ struct DrawJob {
 pub struct Outcome {
     /// The result row.
     pub result: TrialResult,
-    /// The tick log (empty when the trial failed to run).
+    /// The tick log (empty when the trial failed to run, and for tasks).
     pub log: RunLog,
+    /// A task trial's tick log per entry of its `steps`.
+    pub step_logs: Vec<RunLog>,
 }
 
 impl Outcome {
@@ -425,8 +435,10 @@ fn run_job(
             states: Vec::new(),
             draw: None,
             set: variant.set.clone(),
+            steps: Vec::new(),
         },
         log: RunLog::default(),
+        step_logs: Vec::new(),
     };
     let (specialised, variant_bound);
     let (bound, plan) = match bound {
@@ -548,8 +560,10 @@ fn run_job(
                 .collect(),
             draw: None,
             set: sets,
+            steps: Vec::new(),
         },
         log,
+        step_logs: Vec::new(),
     }
 }
 
@@ -609,20 +623,38 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
         check_real_dir(dir)?;
     }
     let (trials, base_dir) = load_trials(args)?;
-    let names: Vec<String> = trials.skills.iter().map(skill_stem).collect();
+    // `--skill NAME` selects skill and task entries alike, by name (an entry's `name`, else its
+    // file's stem).
+    let mut names: Vec<String> = trials.skills.iter().map(skill_stem).collect();
+    names.extend(trials.tasks.iter().map(tasks::stem));
     if let Some(unknown) = args.skills.iter().find(|name| !names.contains(name)) {
         return Err(Failure::Usage(format!(
-            "--skill `{unknown}`: the trials have no such skill; they have {}",
+            "--skill `{unknown}`: the trials have no such skill or task; they have {}",
             names.join(", ")
         )));
+    }
+    // A task step without criteria of its own is judged by its skill's `[[skill]]` entry's,
+    // whether or not `--skill` selects that entry.
+    let mut skill_criteria = std::collections::BTreeMap::new();
+    for spec in &trials.skills {
+        skill_criteria.entry(skill_stem(spec)).or_insert(spec.criteria);
     }
     let selected: Vec<SkillTrials> = trials
         .skills
         .into_iter()
         .filter(|spec| args.skills.is_empty() || args.skills.contains(&skill_stem(spec)))
         .collect();
-    if selected.is_empty() {
-        return Err(Failure::Usage("the trials file lists no skill".into()));
+    let selected_tasks: Vec<tasks::TaskTrials> = trials
+        .tasks
+        .into_iter()
+        .filter(|spec| args.skills.is_empty() || args.skills.contains(&tasks::stem(spec)))
+        .collect();
+    if selected.is_empty() && (selected_tasks.is_empty() || args.sweep.is_some()) {
+        return Err(Failure::Usage(if args.sweep.is_some() {
+            "the trials file lists no skill (a sweep runs skills only)".into()
+        } else {
+            "the trials file lists no skill or task".into()
+        }));
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
@@ -652,13 +684,34 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
             .map(|spec| prepare(spec, &base_dir, &args.params))
             .collect()
     });
+    // Sweeps draw scenes for skills only: tasks are not prepared.
+    let task_specs = if args.sweep.is_some() {
+        if !selected_tasks.is_empty() {
+            say(
+                verbosity,
+                &format!(
+                    "--sweep: the {} task entr(ies) are skipped (a sweep runs skills only)\n",
+                    selected_tasks.len()
+                ),
+            )?;
+        }
+        Vec::new()
+    } else {
+        selected_tasks
+    };
+    let mut prepared_tasks: Vec<tasks::PreparedTask> = pool.install(|| {
+        task_specs
+            .into_par_iter()
+            .map(|spec| tasks::prepare(spec, &base_dir, &args.params, &skill_criteria))
+            .collect()
+    });
     if let Some(unused) = args.params.iter().find(|setting| {
         let name = setting.split('=').next().unwrap_or_default().trim();
         !prepared.iter().any(|prep| {
             prep.program_skill
                 .as_ref()
                 .is_ok_and(|(skill, _)| skill.params.iter().any(|p| p.name == name))
-        })
+        }) && !prepared_tasks.iter().any(|prep| prep.declares(name))
     }) {
         return Err(Failure::Usage(format!(
             "--param `{unused}`: no skill of these trials declares that parameter"
@@ -667,10 +720,14 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     for prep in &mut prepared {
         prep.swap.clone_from(&swap);
     }
+    for prep in &mut prepared_tasks {
+        prep.swap.clone_from(&swap);
+    }
     let bound: Vec<Bound<'_>> = prepared.iter().map(bind_prepared).collect();
     verbosity.detail(format_args!(
-        "learned {} skill(s) in {:.1} s",
+        "learned {} skill(s) and {} task(s) in {:.1} s",
         prepared.len(),
+        prepared_tasks.len(),
         started.elapsed().as_secs_f64()
     ));
     if let Some(draws) = args.sweep {
@@ -685,13 +742,13 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     let mut jobs = Vec::new();
     for (skill, prep) in prepared.iter().enumerate() {
         for variant in 0..prep.spec.variants.len() {
-            jobs.push(Job {
+            jobs.push(Job::Skill {
                 skill,
                 variant,
                 replay: false,
             });
             if !args.no_replay {
-                jobs.push(Job {
+                jobs.push(Job::Skill {
                     skill,
                     variant,
                     replay: true,
@@ -699,19 +756,25 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
             }
         }
     }
+    // Tasks have no replay baseline: one trial per variant.
+    for (task, prep) in prepared_tasks.iter().enumerate() {
+        jobs.extend((0..prep.spec.variants.len()).map(|variant| Job::Task { task, variant }));
+    }
     progress.set_length(jobs.len() as u64);
     progress.set_message("trials");
     let outcomes: Vec<Outcome> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let prep = &prepared[job.skill];
-                let outcome = run_job(
-                    prep,
-                    &bound[job.skill],
-                    &prep.spec.variants[job.variant],
-                    job.replay,
-                    &args.limits,
-                );
+                let outcome = match *job {
+                    Job::Skill { skill, variant, replay } => {
+                        let prep = &prepared[skill];
+                        run_job(prep, &bound[skill], &prep.spec.variants[variant], replay, &args.limits)
+                    }
+                    Job::Task { task, variant } => {
+                        let prep = &prepared_tasks[task];
+                        tasks::run_trial(prep, &prep.spec.variants[variant], &args.limits)
+                    }
+                };
                 progress.inc(1);
                 outcome
             })
@@ -732,7 +795,11 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     }
     say(
         verbosity,
-        &format!("{table}{} trials in {elapsed:.1} s\n", outcomes.len()),
+        &format!(
+            "{table}{} trials in {elapsed:.1} s\n{}\n",
+            outcomes.len(),
+            pass_line(&outcomes)
+        ),
     )?;
     let real = match &args.real {
         Some(dir) => {
@@ -750,6 +817,7 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     let written = report::write(
         &args.out,
         &prepared_views(&prepared, &bound),
+        &tasks::views(&prepared_tasks),
         &outcomes,
         elapsed,
         &table,
@@ -757,17 +825,23 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     )
     .map_err(|err| Failure::Usage(format!("cannot write the report to `{}`: {err}", args.out.display())))?;
     say(verbosity, &format!("report: {}\n", written.display()))?;
-    // A gate for CI: any skill trial that failed its criteria (or could not run) fails the eval.
-    let failed: Vec<&TrialResult> = outcomes
-        .iter()
-        .map(|o| &o.result)
-        .filter(|r| r.mode == "skill" && (r.error || !r.success))
-        .collect();
-    if !failed.is_empty() {
+    // A gate for CI: any skill or task trial that failed its criteria (or could not run) fails
+    // the eval.
+    let mut any_failed = false;
+    for mode in ["skill", "task"] {
+        let failed: Vec<&TrialResult> = outcomes
+            .iter()
+            .map(|o| &o.result)
+            .filter(|r| r.mode == mode && (r.error || !r.success))
+            .collect();
+        if failed.is_empty() {
+            continue;
+        }
+        any_failed = true;
         eprintln!(
-            "{} of {} skill trials failed:",
+            "{} of {} {mode} trials failed:",
             failed.len(),
-            outcomes.iter().filter(|o| o.result.mode == "skill").count()
+            outcomes.iter().filter(|o| o.result.mode == mode).count()
         );
         for r in &failed {
             eprintln!(
@@ -779,7 +853,24 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
             );
         }
     }
-    Ok(u8::from(!failed.is_empty()))
+    Ok(u8::from(any_failed))
+}
+
+/// `N/M skill trials pass`, and `K/L task trials pass` when there are task trials.
+fn pass_line(outcomes: &[Outcome]) -> String {
+    let count = |mode: &str| {
+        let of_mode: Vec<&TrialResult> = outcomes.iter().map(|o| &o.result).filter(|r| r.mode == mode).collect();
+        (of_mode.iter().filter(|r| r.success && !r.error).count(), of_mode.len())
+    };
+    let (skills_ok, skills) = count("skill");
+    let mut line = format!("{skills_ok}/{skills} skill trials pass");
+    let (tasks_ok, tasks) = count("task");
+    if tasks > 0 {
+        line.push_str(&format!(
+            ", {tasks_ok}/{tasks} task trials pass (tasks have no replay baseline)"
+        ));
+    }
+    line
 }
 
 /// What the report needs of each prepared skill.

@@ -4,6 +4,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::real::RealResult;
+use super::tasks::{StepResult, TaskView};
 use super::{Outcome, SkillView};
 use crate::atomic;
 use crate::plot::{self, Plot};
@@ -53,8 +54,54 @@ pub(super) fn table(outcomes: &[Outcome]) -> String {
         if r.error {
             let _ = writeln!(out, "         error: {}", r.message);
         }
+        for step in &r.steps {
+            let _ = writeln!(out, "{}", step_row(step));
+        }
     }
     out
+}
+
+/// Whether a step row says yes, no or that it did not run (`-`); fallbacks are not judged.
+fn step_ok(step: &StepResult) -> &'static str {
+    if !step.ran {
+        "-"
+    } else if step.fallback {
+        "fb"
+    } else if step.success {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
+/// One step of a task trial under its task's row: its metrics, the peak bound and why it failed.
+fn step_row(step: &StepResult) -> String {
+    let label = format!(
+        "  {}step {} ({})",
+        if step.fallback { "fallback " } else { "" },
+        step.step,
+        step.skill
+    );
+    let bound = step
+        .peak_bound_n
+        .map_or(String::new(), |bound| format!("peak bound {bound:.1} N"));
+    let why = match (&step.reason, bound.is_empty()) {
+        (Some(reason), true) => reason.clone(),
+        (Some(reason), false) => format!("{reason}; {bound}"),
+        (None, _) => bound,
+    };
+    format!(
+        "{:<8} {:<31} {:<6} {:<4} {:>8} {:>9} {:>8.1} {:>7} {:>7.2}  {why}",
+        "",
+        truncate(&label, 31),
+        "step",
+        step_ok(step),
+        percent(step.force_rms_rel),
+        percent(step.contact_share),
+        step.peak_force_n,
+        number(step.stop_force_n),
+        step.duration_s
+    )
 }
 
 fn truncate(text: &str, width: usize) -> String {
@@ -78,6 +125,7 @@ fn escape(text: &str) -> String {
 pub(super) fn write(
     out: &Path,
     skills: &[SkillView<'_>],
+    tasks: &[TaskView<'_>],
     outcomes: &[Outcome],
     elapsed_s: f64,
     table: &str,
@@ -96,6 +144,16 @@ pub(super) fn write(
             "error": s.error,
             "segments": s.bound.map(|b| &b.learned.segments),
         })).collect::<Vec<_>>(),
+        "tasks": tasks.iter().map(|t| serde_json::json!({
+            "name": t.name,
+            "error": t.error,
+            "replay": "none: a task has no replay baseline",
+            "steps": t.steps.iter().map(|s| serde_json::json!({
+                "step": s.step,
+                "criteria": s.criteria,
+                "demo": s.demo,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
     });
     let json = serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)? + "\n";
     atomic::write(&out.join("summary.json"), json.as_bytes())?;
@@ -106,7 +164,7 @@ pub(super) fn write(
     html.push_str("</style></head><body>\n<h1>skillc eval</h1>\n");
     let _ = writeln!(
         html,
-        "<p>{} trials in {elapsed_s:.1} s on {} worker threads. Each skill is learned once from its demonstration and reproduced in every variant of its scene; <em>replay</em> is the thesis's baseline (the learned motions under pure impedance control, no force control, no contact adaptation).</p>",
+        "<p>{} trials in {elapsed_s:.1} s on {} worker threads. Each skill is learned once from its demonstration and reproduced in every variant of its scene; <em>replay</em> is the thesis's baseline (the learned motions under pure impedance control, no force control, no contact adaptation). A <em>task</em> runs its steps in sequence on one arm, each step learned once from its own demonstration and judged as a skill trial is, against its demonstration's peak force; tasks have no replay baseline.</p>",
         outcomes.len(),
         rayon::current_num_threads()
     );
@@ -136,6 +194,30 @@ pub(super) fn write(
             r.duration_s,
             escape(&r.message)
         );
+        for step in &r.steps {
+            let class = match step_ok(step) {
+                "yes" => "yes",
+                "no" => "no",
+                _ => "",
+            };
+            let _ = writeln!(
+                html,
+                "<tr class=\"{class}\"><td class=l></td><td class=l>{}step {} ({})</td><td class=l>step</td><td>{}</td><td>{}</td><td>{}</td><td>{:.1} (bound {})</td><td>{}</td><td>{}</td><td></td><td>{:.2}</td><td class=l>{}{}</td></tr>",
+                if step.fallback { "fallback " } else { "" },
+                escape(&step.step),
+                escape(&step.skill),
+                step_ok(step),
+                percent(step.force_rms_rel),
+                percent(step.contact_share),
+                step.peak_force_n,
+                number(step.peak_bound_n),
+                number(step.stop_force_n),
+                number(step.learned_force_n),
+                step.duration_s,
+                step.reason.as_deref().map_or(String::new(), |reason| format!("{}: ", escape(reason))),
+                escape(&step.message)
+            );
+        }
     }
     html.push_str("</table>\n");
     for skill in skills {
@@ -151,7 +233,7 @@ pub(super) fn write(
         );
         let runs: Vec<plot::Trial<'_>> = outcomes
             .iter()
-            .filter(|o| o.result.skill == skill.name)
+            .filter(|o| o.result.skill == skill.name && o.result.mode != "task")
             .map(Outcome::trial)
             .collect();
         for (plot, caption) in [
@@ -168,6 +250,60 @@ pub(super) fn write(
                 }
                 Err(err) => {
                     let _ = writeln!(html, "<p class=err>plot {kind} failed: {}</p>", escape(&err));
+                }
+            }
+        }
+    }
+    for task in tasks {
+        let _ = writeln!(
+            html,
+            "<h2>task {}</h2>\n<p>No replay baseline: a task's steps start where the last ended (and `at:` where an earlier step found a state), which a replay of each demonstration cannot do.</p>",
+            escape(task.name)
+        );
+        if let Some(error) = task.error {
+            let _ = writeln!(html, "<p class=err>could not prepare: {}</p>", escape(error));
+            continue;
+        }
+        let trials: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| o.result.skill == task.name && o.result.mode == "task")
+            .collect();
+        for (index, step) in task.steps.iter().enumerate() {
+            let _ = writeln!(
+                html,
+                "<h3>step {}</h3>\n<p>criteria: {}</p>",
+                escape(step.step),
+                escape(&serde_json::to_string(&step.criteria).unwrap_or_default())
+            );
+            let runs: Vec<plot::Trial<'_>> = trials
+                .iter()
+                .filter_map(|o| {
+                    o.step_logs.get(index).map(|log| plot::Trial {
+                        variant: &o.result.variant,
+                        replay: false,
+                        error: o.result.error || log.ticks.is_empty(),
+                        log,
+                    })
+                })
+                .collect();
+            let subject = plot::Subject {
+                name: &step.title,
+                demo: step.demo,
+                bound: step.bound.as_ref(),
+            };
+            for (plot, caption) in [
+                (Plot::Force, "Applied force along the compliant z during the step, per variant, and the learned desired force (black)."),
+                (Plot::Timeline, "The step's states over time, per variant."),
+            ] {
+                let kind = plot.name();
+                let file = format!("{}_{kind}.svg", step.title);
+                match plot::draw(plot, &out.join("plots").join(&file), &subject, &runs) {
+                    Ok(()) => {
+                        let _ = writeln!(html, "<figure><img src=\"plots/{file}\" alt=\"{kind}\"><figcaption>{caption}</figcaption></figure>");
+                    }
+                    Err(err) => {
+                        let _ = writeln!(html, "<p class=err>plot {kind} failed: {}</p>", escape(&err));
+                    }
                 }
             }
         }

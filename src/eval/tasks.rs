@@ -586,32 +586,74 @@ fn judge_step(
     let [scale, offset] = criteria.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
     let peak_bound = scale * learned.demo_peak_n + offset;
     let run = &report.report;
-    let reason = if let Some(violation) = &run.reflex {
-        Some(format!("reflex:{}", violation.quantity.name()))
+    let percent = |value: Option<f64>| value.map_or("none".to_string(), |v| format!("{:.1} %", v * 100.0));
+    // The first reason the step fails, in the skill trials' order, with what was measured.
+    let (reason, detail) = if let Some(violation) = &run.reflex {
+        (Some(format!("reflex:{}", violation.quantity.name())), None)
     } else if run.visits.is_empty() && task_step.step.at.is_some() {
-        // `at: STEP.STATE` not found: the step failed before it moved.
-        Some("anchor".to_string())
+        // `at: STEP.STATE` not found: the step failed before it moved (the message says which).
+        (Some("anchor".to_string()), None)
     } else if run.outcome != skill_ir::Outcome::Success {
-        Some(format!("terminal:{}", run.terminal.as_deref().unwrap_or("none")))
+        (
+            Some(format!("terminal:{}", run.terminal.as_deref().unwrap_or("none"))),
+            None,
+        )
     } else if measured.peak_force_n > peak_bound {
-        Some("criterion:peak_force".to_string())
-    } else if criteria
+        (
+            Some("criterion:peak_force".to_string()),
+            Some(format!(
+                "peak force {:.1} N above the bound {peak_bound:.1} N ({scale} × the demonstration's {:.1} N + {offset} N)",
+                measured.peak_force_n, learned.demo_peak_n
+            )),
+        )
+    } else if let Some(max) = criteria
         .force_rms_rel
-        .is_some_and(|max| !measured.force_rms_rel.is_some_and(|v| v <= max))
+        .filter(|max| !measured.force_rms_rel.is_some_and(|v| v <= *max))
     {
-        Some("criterion:force_rms".to_string())
-    } else if criteria
+        (
+            Some("criterion:force_rms".to_string()),
+            Some(format!(
+                "force RMS {} of the learned force, above {:.1} %",
+                percent(measured.force_rms_rel),
+                max * 100.0
+            )),
+        )
+    } else if let Some(min) = criteria
         .contact_share
-        .is_some_and(|min| !measured.contact_share.is_some_and(|v| v >= min))
+        .filter(|min| !measured.contact_share.is_some_and(|v| v >= *min))
     {
-        Some("criterion:contact_share".to_string())
+        (
+            Some("criterion:contact_share".to_string()),
+            Some(format!(
+                "in contact for {} of the contact phase, below {:.1} %",
+                percent(measured.contact_share),
+                min * 100.0
+            )),
+        )
     } else if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
         let met = measured
             .stop_force_n
             .is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
-        (!met).then(|| "criterion:stop_force".to_string())
+        if met {
+            (None, None)
+        } else {
+            (
+                Some("criterion:stop_force".to_string()),
+                Some(format!(
+                    "stop force {} against the learned {learned:.2} N, beyond ±{:.1} %",
+                    measured
+                        .stop_force_n
+                        .map_or("none".to_string(), |f| format!("{f:.2} N")),
+                    max * 100.0
+                )),
+            )
+        }
     } else {
-        None
+        (None, None)
+    };
+    let message = match detail {
+        Some(detail) => format!("{}; {detail}", run.message),
+        None => run.message.clone(),
     };
     let result = StepResult {
         step: task_step.step.name.clone(),
@@ -628,7 +670,7 @@ fn judge_step(
         stop_force_n: measured.stop_force_n,
         learned_force_n: learned_force,
         duration_s: run.duration_s,
-        message: run.message.clone(),
+        message,
         reason,
         states: run
             .visits

@@ -1,6 +1,6 @@
 //! `skillc eval` on `[[task]]` entries: the example task find_wipe_hold judged step by step in two
 //! scenes; a trial that fails names the step and why (a criterion, a terminal, the steps not
-//! run); a `[[task]]` entry that names a skill file, a missing file, a step whose demonstration
+//! run, an `at:` anchor the earlier step never entered); a `[[task]]` entry that names a skill file, a missing file, a step whose demonstration
 //! is missing or criteria for a step the task lacks is an error row naming the file and field.
 
 use std::path::{Path, PathBuf};
@@ -169,6 +169,50 @@ fn a_failing_task_trial_names_the_step_and_the_reason() {
     assert!(demonstrated["steps"][0]["reason"].is_null(), "{demonstrated}");
     assert_eq!(demonstrated["steps"][1]["reason"], "criterion:force_rms");
     assert_eq!(demonstrated["steps"][1]["criteria_from"], "task");
+    // A step whose anchor (`at: find.detour`) the earlier step never entered: the touch reaches
+    // its force and never takes the detour it would take on a timeout.
+    let touch = std::fs::read_to_string(Path::new(root()).join("stdlib-skills/touch.skill")).expect("touch");
+    let detour = touch
+        .replace("skill touch {", "skill touch_detour {")
+        .replace("on timeout 2 s -> retract", "on timeout 2 s -> detour")
+        .replace(
+            "    terminal done: success",
+            "    state detour {\n        move retreat relative\n        control position all in contact\n        \
+             stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done -> done\n    }\n\n    terminal done: success",
+        );
+    assert!(detour.contains("-> detour") && detour.contains("state detour"));
+    std::fs::write(dir.join("touch_detour.skill"), detour).expect("write skill");
+    let demo = format!("{}/examples/demos/touch.csv", root());
+    std::fs::write(
+        dir.join("anchored.skill"),
+        format!(
+            "import \"touch_detour.skill\"\n\ntask anchored {{\n    step find = touch_detour(demo: \"{demo}\")\n    \
+             step again = touch_detour(demo: \"{demo}\", at: find.detour)\n}}\n"
+        ),
+    )
+    .expect("write task");
+    let trials = format!(
+        "[[task]]\nfile = \"anchored.skill\"\nscene = \"{}/examples/scenes/table.toml\"\nvariants = [{{ name = \"as demonstrated\", set = [] }}]\n",
+        root()
+    );
+    let (out, summary) = eval(&dir, &trials);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("anchored / as demonstrated: step again: anchor"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("step `find` never entered state `detour`"), "{stderr}");
+    let steps = summary["trials"][0]["steps"].as_array().expect("steps");
+    assert_eq!(steps[0]["success"], true, "{}", steps[0]);
+    assert_eq!(steps[1]["reason"], "anchor");
+    // Criteria from the skill's kind: the touch stops once its force is reached.
+    assert_eq!(steps[0]["criteria_from"], "kind");
+    assert!(
+        steps[0]["criteria"]["stop_force_rel"].as_f64().is_some(),
+        "{}",
+        steps[0]
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

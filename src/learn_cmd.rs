@@ -297,6 +297,9 @@ pub fn summary(learned: &Learned) -> String {
             segment.end_index - segment.start_index
         );
     }
+    for contact in &learned.quality.contacts {
+        let _ = writeln!(out, "  {}", contact_line(contact));
+    }
     if !learned.frames.is_empty() {
         let _ = writeln!(out, "frames:");
     }
@@ -712,4 +715,35 @@ fn place_forces(rows: &mut [Row], bound: &skill_runtime::exec::BoundSkill<'_>, d
         }
     }
     unplaced
+}
+
+/// What the geometric check did to a planar contact segment's boundaries (docs/method.md §3).
+pub fn contact_line(contact: &skill_runtime::skill::ContactBoundaries) -> String {
+    let moved = |label: &str, [before, after]: [f64; 2]| {
+        if (after - before).abs() < 1e-9 {
+            format!("{label} {after:.3} s kept")
+        } else {
+            format!("{label} {before:.3} → {after:.3} s ({:+.3} s)", after - before)
+        }
+    };
+    let mut line = if contact.tolerance_m > 0.0 {
+        format!(
+            "segment {} on the plane of `{}` ({:.1} mm RMS from it, band {:.1} mm): {}, {}",
+            contact.segment,
+            contact.frame,
+            contact.residual_m * 1e3,
+            contact.tolerance_m * 1e3,
+            moved("start", contact.start_s),
+            moved("end", contact.end_s)
+        )
+    } else {
+        format!(
+            "segment {} boundaries not checked against `{}`",
+            contact.segment, contact.frame
+        )
+    };
+    if let Some(kept) = &contact.kept {
+        line.push_str(&format!(" ({kept})"));
+    }
+    line
 }

@@ -367,6 +367,32 @@ pub struct Quality {
     /// Per frame fitted to a plane: its normal checked against the applied force (docs/method.md §4).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub normals: BTreeMap<String, NormalCheck>,
+    /// Per segment a frame imposes a plane on: its boundaries checked against the tool's
+    /// distance from that plane (docs/method.md §3).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub contacts: Vec<ContactBoundaries>,
+}
+
+/// A planar contact segment's boundaries before and after the geometric check (docs/method.md §3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactBoundaries {
+    /// The frame that imposes the plane.
+    pub frame: String,
+    /// The segment (1-based).
+    pub segment: usize,
+    /// RMS distance of the segment (of its middle half when that is not a plane) from its fitted
+    /// plane \[m\].
+    pub residual_m: f64,
+    /// How far above the plane the tool may be and still count as on it \[m\] (0 when the
+    /// check was not made).
+    pub tolerance_m: f64,
+    /// The segment's first sample time as segmentation found it, and after the check \[s\].
+    pub start_s: [f64; 2],
+    /// The segment's last sample time as segmentation found it, and after the check \[s\].
+    pub end_s: [f64; 2],
+    /// Why a boundary was left where segmentation put it, if one was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kept: Option<String>,
 }
 
 /// A fitted plane's normal against the mean applied force of its segment (docs/method.md §4).

@@ -1,13 +1,15 @@
 //! The learning driver: runs a skill's IR learning plan on one demonstration (thesis 4.2.2).
 //!
 //! Segmentation first ([`crate::learn::segment::segment_demo`], configured through
-//! [`crate::learn::ir_seam`]), then frames (so forces can be measured along them), motions,
+//! [`crate::learn::ir_seam`]), its planar contacts' boundaries checked against the geometry
+//! (`contact`), then frames (so forces can be measured along them), motions,
 //! forces and thresholds. A demonstration that does not fit the template (no contact in a force
 //! skill, another number of segments than the template expects) is an error, not a file.
 //!
-//! One file per job: `frames`, `motions`, `forces` (with thresholds), the `smoothing` they
+//! One file per job: `contact`, `frames`, `motions`, `forces` (with thresholds), the `smoothing` they
 //! share, and the `error` type; this file holds the driver and the sample lookups all of them use.
 
+mod contact;
 mod error;
 mod forces;
 mod frames;
@@ -68,7 +70,8 @@ pub fn learn_skill(
     let demo = prepared.demo;
     let mut warnings = warnings.to_vec();
     warnings.extend(prepared.warnings.iter().map(ToString::to_string));
-    let segments = segment(plan, &demo)?;
+    let mut segments = segment(plan, &demo)?;
+    let contacts = contact::refine_planar_contacts(plan, &demo, &mut segments, prepared.position_noise_m);
     let n = demo.len();
     let rate_hz = if demo.duration_s() > 0.0 {
         (n - 1) as f64 / demo.duration_s()
@@ -83,6 +86,7 @@ pub fn learn_skill(
             position_noise_m: prepared.position_noise_m,
             smoothing: prepared.smoothing.to_string(),
             wrench: Some(prepared.wrench.clone()),
+            contacts,
             ..Quality::default()
         },
         smoothing: prepared.smoothing,

@@ -690,8 +690,11 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
             say(
                 verbosity,
                 &format!(
-                    "--sweep: the {} task entr(ies) are skipped (a sweep runs skills only)\n",
-                    selected_tasks.len()
+                    "--sweep: {} skipped (a sweep runs skills only)\n",
+                    match selected_tasks.len() {
+                        1 => "the task entry is".to_string(),
+                        n => format!("the {n} task entries are"),
+                    }
                 ),
             )?;
         }

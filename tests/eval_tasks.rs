@@ -1,7 +1,8 @@
 //! `skillc eval` on `[[task]]` entries: the example task find_wipe_hold judged step by step in two
 //! scenes; a trial that fails names the step and why (a criterion, a terminal, the steps not
-//! run, an `at:` anchor the earlier step never entered); a `[[task]]` entry that names a skill file, a missing file, a step whose demonstration
-//! is missing or criteria for a step the task lacks is an error row naming the file and field.
+//! run, an `at:` anchor the earlier step never entered); a `[[task]]` entry that names a skill
+//! file, a missing file, a step whose demonstration is missing or criteria for a step the task
+//! lacks is an error row naming the file and field.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -235,6 +235,39 @@ fn horizontal_arm_gravity_torque_at_a2() {
     assert!(gravity[0].abs() < 1e-12 && gravity[2].abs() < 1e-9);
 }
 
+/// The composite-rigid-body mass matrix against Newton-Euler, column by column:
+/// `M e_j = ID(q, 0, e_j) − g(q)`, on random configurations of the LWR-IV and of the iiwa.
+#[test]
+fn mass_matrix_columns_match_newton_euler() {
+    let iiwa = skill_runtime::robot::IIWA14.load().expect("the shipped iiwa loads");
+    for robot in [lwr4(), iiwa] {
+        let n = robot.dof();
+        let mut data = robot.data();
+        let mut rng = Rng(17);
+        let mut mass = DMatrix::zeros(n, n);
+        let (mut gravity, mut column, zeros) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for _ in 0..50 {
+            let q = rng.vector(n, -2.5, 2.5);
+            robot.forward_kinematics(&mut data, &q);
+            robot.mass_matrix(&mut data, &mut mass);
+            robot.gravity_torques(&mut data, &mut gravity);
+            for j in 0..n {
+                let mut unit = vec![0.0; n];
+                unit[j] = 1.0;
+                robot.inverse_dynamics(&mut data, &zeros, &unit, &mut column);
+                for i in 0..n {
+                    let expected = column[i] - gravity[i];
+                    assert!(
+                        (mass[(i, j)] - expected).abs() < 1e-12 * (1.0 + expected.abs()),
+                        "M[{i}][{j}] = {} against {expected} at {q:?}",
+                        mass[(i, j)]
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn prismatic_joint_dynamics_are_consistent() {
     let urdf = r#"<robot name="slider">

@@ -1,6 +1,7 @@
-//! Rigid-body dynamics of the chain by recursive Newton-Euler: gravity, inverse dynamics, mass matrix, Coriolis.
+//! Rigid-body dynamics of the chain: recursive Newton-Euler (gravity, inverse dynamics, Coriolis)
+//! and the composite-rigid-body mass matrix.
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use super::{JointKind, Robot, RobotData};
 
@@ -57,35 +58,66 @@ impl Robot {
     }
 
     /// The joint-space mass matrix M(q) at the configuration of the last
-    /// [`Robot::forward_kinematics`] (one Newton-Euler pass per column).
+    /// [`Robot::forward_kinematics`], by the composite-rigid-body algorithm (Walker and Orin;
+    /// Featherstone, *Rigid Body Dynamics Algorithms*, §6.2) for a serial chain: one backward
+    /// pass accumulates each body's composite inertia (itself and every body after it) in its
+    /// own frame, and `M[i][j]` is joint `j`'s motion axis applied to the spatial force joint
+    /// `i`'s unit motion needs from that composite, carried back to body `j`. About a fifth of
+    /// the work of one Newton-Euler pass per column.
     ///
     /// # Panics
     /// If `out` is not dof × dof.
     pub fn mass_matrix(&self, data: &mut RobotData, out: &mut DMatrix<f64>) {
         let n = self.dof();
         assert_eq!(out.shape(), (n, n), "mass matrix must be dof x dof");
-        let zeros = std::mem::take(&mut data.zeros);
-        let mut unit = std::mem::take(&mut data.unit);
-        let mut column = std::mem::take(&mut data.column);
-        for col in 0..n {
-            unit.fill(0.0);
-            unit[col] = 1.0;
-            self.rnea(data, &zeros, &unit, false, &mut column);
-            for row in 0..n {
-                out[(row, col)] = column[row];
+        debug_assert!(data.kinematics_done, "call forward_kinematics first");
+        // Composite inertia of bodies i.. in body i's frame, about its origin: mass m, first
+        // moment h = m c, rotational inertia about the origin. Built from the last body back.
+        let mut mass = 0.0;
+        let mut first = Vector3::zeros();
+        let mut rotational = Matrix3::zeros();
+        for i in (0..n).rev() {
+            if i + 1 < n {
+                // Carry the composite of bodies i+1.. from frame i+1 into frame i.
+                let rot = &data.local_rot[i + 1];
+                let pos = &data.local_pos[i + 1];
+                let h = rot * first;
+                rotational = rot * rotational * rot.transpose()
+                    + (Matrix3::identity() * (2.0 * pos.dot(&h) + mass * pos.dot(pos))
+                        - (h * pos.transpose() + pos * h.transpose() + mass * pos * pos.transpose()));
+                first = h + pos * mass;
+            }
+            let body = &self.bodies[i];
+            let c = body.com;
+            mass += body.mass;
+            first += c * body.mass;
+            rotational += body.inertia + (Matrix3::identity() * c.dot(&c) - c * c.transpose()) * body.mass;
+            // The spatial force (moment about the origin, force) the composite needs for a unit
+            // motion of joint i: momentum of the motion S_i.
+            let (mut moment, mut force) = match body.kind {
+                JointKind::Revolute => (rotational * body.axis, -first.cross(&body.axis)),
+                JointKind::Prismatic => (first.cross(&body.axis), body.axis * mass),
+            };
+            out[(i, i)] = self.project(i, &moment, &force);
+            for j in (0..i).rev() {
+                // From frame j+1 into frame j.
+                let rot = &data.local_rot[j + 1];
+                force = rot * force;
+                moment = rot * moment + data.local_pos[j + 1].cross(&force);
+                let value = self.project(j, &moment, &force);
+                out[(i, j)] = value;
+                out[(j, i)] = value;
             }
         }
-        // Symmetrise away round-off so Cholesky users see an exactly symmetric matrix.
-        for row in 0..n {
-            for col in row + 1..n {
-                let mean = 0.5 * (out[(row, col)] + out[(col, row)]);
-                out[(row, col)] = mean;
-                out[(col, row)] = mean;
-            }
+    }
+
+    /// Joint `j`'s motion axis applied to a spatial force in body `j`'s frame.
+    fn project(&self, j: usize, moment: &Vector3<f64>, force: &Vector3<f64>) -> f64 {
+        let body = &self.bodies[j];
+        match body.kind {
+            JointKind::Revolute => body.axis.dot(moment),
+            JointKind::Prismatic => body.axis.dot(force),
         }
-        data.zeros = zeros;
-        data.unit = unit;
-        data.column = column;
     }
 
     /// Recursive Newton-Euler in body frames (Luh, Walker, Paul), gravity optional.

@@ -27,8 +27,6 @@ pub struct RobotData {
     pub(crate) force: Vec<Vector3<f64>>,
     pub(crate) moment: Vec<Vector3<f64>>,
     pub(crate) zeros: Vec<f64>,
-    pub(crate) unit: Vec<f64>,
-    pub(crate) column: Vec<f64>,
     pub(crate) kinematics_done: bool,
 }
 
@@ -47,8 +45,6 @@ impl Robot {
             force: vec![Vector3::zeros(); n],
             moment: vec![Vector3::zeros(); n],
             zeros: vec![0.0; n],
-            unit: vec![0.0; n],
-            column: vec![0.0; n],
             kinematics_done: false,
         }
     }

@@ -245,7 +245,7 @@ fn walk(
             let lo = (prev.start..found.start)
                 .find(|&k| t[k] - t[prev.start] >= MIN_NEIGHBOUR_S)
                 .unwrap_or(found.start);
-            bounds.0 = run_edge(t, (lo..=core.start).rev(), |k| surface.contact(&p[k], &f[k])).unwrap_or(core.start);
+            bounds.0 = run_edge(t, (lo..=core.start).rev(), |k| surface.contact(&p[k], &f[k])).unwrap_or(found.start);
         }
     }
     if index + 1 < segments.len() {
@@ -259,7 +259,7 @@ fn walk(
                 .rev()
                 .find(|&k| t[next.end - 1] - t[k] >= MIN_NEIGHBOUR_S)
                 .unwrap_or(found.end);
-            bounds.1 = run_edge(t, core.end - 1..hi, |k| surface.contact(&p[k], &f[k])).map_or(core.end, |k| k + 1);
+            bounds.1 = run_edge(t, core.end - 1..hi, |k| surface.contact(&p[k], &f[k])).map_or(found.end, |k| k + 1);
         }
     }
     bounds
@@ -527,6 +527,17 @@ mod tests {
             report.kept.as_deref().unwrap_or("").contains("not a plane"),
             "{report:?}"
         );
+    }
+
+    /// A contact pressed more lightly than the 1 N the check calls contact keeps the boundaries
+    /// segmentation found (it is not trimmed to its middle).
+    #[test]
+    fn a_contact_lighter_than_the_contact_force_is_left_alone() {
+        let demo = Wipe::flat().demo(|_| 0.5, |_| 0.0);
+        let mut segments = cut(&demo, 2.5, 7.5);
+        let before = segments.clone();
+        refined(&demo, &mut segments, None);
+        assert_eq!(segments, before);
     }
 
     /// A template that only lets a plane compete with other models asserts no plane: nothing is

@@ -183,6 +183,8 @@ pub enum StmtKind {
         /// Whether `relative` was written: the motion moves as a whole to start at the entry
         /// pose (its goal moves by the same offset).
         relative: bool,
+        /// `at NAME`: the goal is moved to the position `capture NAME` stored.
+        at: Option<Ident>,
     },
     /// `control force z, position x y rx ry rz in FRAME`.
     Control {
@@ -215,6 +217,8 @@ pub enum StmtKind {
     },
     /// `repeat 4`.
     Repeat(Expr),
+    /// `capture NAME`: the tool's pose at entry, kept under NAME for the rest of the run.
+    Capture(Ident),
     /// `on GUARD -> TARGET`.
     Transition {
         /// The guard.

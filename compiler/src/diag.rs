@@ -140,6 +140,11 @@ codes! {
     /// `for` on a guard that only counts time since entry: `on dwell 100 ms for 50 ms -> next`
     /// (that is `dwell 150 ms`).
     ForOnTimedGuard => "skill::check::for_on_timed_guard", Error;
+    /// `move back at found` when no state of the skill has `capture found`.
+    UnknownCapture => "skill::check::unknown_capture", Error;
+    /// `move back relative at found`: `relative` starts the motion's shape at the entry pose,
+    /// `at` ends it at a captured pose; a move takes one of them.
+    RelativeAndAt => "skill::check::relative_and_at", Error;
     /// A force-controlled axis whose PI integral has no limit: it can wind up.
     NoIntegralLimit => "skill::lint::no_integral_limit", Warning;
     /// A state that only waits for contact, with no timeout, motion or dwell to leave it.
@@ -161,6 +166,11 @@ codes! {
     /// `lift off 2 cm at 10 mm/s` in a state that never lifts off: one that force-controls an
     /// axis, or approaches a contact (`approach`, or a force guard).
     LiftOffIgnored => "skill::lint::lift_off_ignored", Warning;
+    /// `capture found` that no `move ... at found` uses.
+    UnusedCapture => "skill::lint::unused_capture", Warning;
+    /// `move back at found` in a state the run can reach from the initial state without passing
+    /// through a state with `capture found`: the run fails there if it does.
+    AtBeforeCapture => "skill::lint::at_before_capture", Warning;
 }
 
 impl fmt::Display for Code {

@@ -296,6 +296,15 @@ impl Printer<'_> {
 fn statement(stmt: &StmtKind) -> String {
     match stmt {
         StmtKind::Move {
+            motion,
+            relative,
+            at: Some(at),
+            ..
+        } => match relative {
+            true => format!("move {} relative at {}", motion.name, at.name),
+            false => format!("move {} at {}", motion.name, at.name),
+        },
+        StmtKind::Move {
             motion, relative: true, ..
         } => format!("move {} relative", motion.name),
         StmtKind::Move { motion, .. } => format!("move {} from current", motion.name),
@@ -336,6 +345,7 @@ fn statement(stmt: &StmtKind) -> String {
             None => format!("lift off {}", expr(distance)),
         },
         StmtKind::Repeat(count) => format!("repeat {}", expr(count)),
+        StmtKind::Capture(name) => format!("capture {}", name.name),
         StmtKind::Transition { guard: g, target } => {
             let target = match target {
                 Target::State(name) => name.name.clone(),

@@ -195,7 +195,7 @@ fn join_or(items: &[&str]) -> String {
 
 /// The statements of a state, for "expected ..." messages.
 const STATEMENTS: &str =
-    "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `lift off`, `repeat`, `on`)";
+    "a statement (`move`, `control`, `stiffness`, `apply`, `gains`, `entry`, `approach`, `lift off`, `repeat`, `capture`, `on`)";
 
 /// What a rule means to a user, for "expected ..." messages.
 fn rule_label(rule: Rule) -> Option<&'static str> {
@@ -222,6 +222,8 @@ fn rule_label(rule: Rule) -> Option<&'static str> {
         }
         Rule::gains_stmt | Rule::entry_stmt | Rule::approach_stmt | Rule::approach_kw | Rule::transition => STATEMENTS,
         Rule::lift_off_stmt | Rule::lift_kw | Rule::repeat_stmt | Rule::repeat_kw => STATEMENTS,
+        Rule::capture_stmt | Rule::capture_kw => STATEMENTS,
+        Rule::move_at => "`at`",
         Rule::off_kw => "`off`",
         Rule::from_current => "`from current`",
         Rule::move_relative => "`relative`",
@@ -516,11 +518,21 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
     let kind = match rule {
         Rule::move_stmt => {
             let motion = ident(inner.next().expect("grammar: move names a motion"));
-            let start = inner.next().map(|pair| pair.as_rule());
+            let mut start = None;
+            let mut at = None;
+            for part in inner {
+                match part.as_rule() {
+                    Rule::move_at => {
+                        at = part.into_inner().next().map(ident);
+                    }
+                    rule => start = Some(rule),
+                }
+            }
             StmtKind::Move {
                 motion,
                 from_current: start == Some(Rule::from_current),
                 relative: start == Some(Rule::move_relative),
+                at,
             }
         }
         Rule::control_stmt => {
@@ -555,6 +567,10 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
         Rule::repeat_stmt => {
             let _keyword = inner.next().expect("grammar: repeat keyword");
             StmtKind::Repeat(expr(inner.next().expect("grammar: repeat has a count")))
+        }
+        Rule::capture_stmt => {
+            let _keyword = inner.next().expect("grammar: capture keyword");
+            StmtKind::Capture(ident(inner.next().expect("grammar: capture names a pose")))
         }
         Rule::transition => {
             let guard_pair = inner.next().expect("grammar: transition has a guard");

@@ -32,7 +32,10 @@ use serde::{Deserialize, Serialize};
 /// - 5: a skill lists its [`Param`]s, a task step may carry the skill specialised with the
 ///   parameters it sets ([`Step::specialised`]) and may start at a pose an earlier step found
 ///   ([`Step::at`]) (all optional: a version 4 file reads as a version 5 file without them).
-pub const IR_VERSION: u32 = 5;
+/// - 6: an active state may [`ActiveState::capture`] the tool's pose at entry under a name and
+///   place its motion's goal at a captured pose ([`ActiveState::motion_at`]) (both optional: a
+///   version 5 file reads as a version 6 file without them).
+pub const IR_VERSION: u32 = 6;
 
 /// A compiled `.skill` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -747,6 +750,17 @@ pub struct ActiveState {
     /// runs from the entry pose to its demonstrated goal. Left out of the JSON when `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub motion_relative: bool,
+    /// `move M at NAME`: the motion's goal is moved (as a whole, orientation goal unchanged) so
+    /// that its position goal is the tool point's position that `capture NAME` stored; the run
+    /// fails, naming the capture, when the state is entered before any capture of NAME. Never
+    /// with [`ActiveState::motion_relative`]. Left out of the JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion_at: Option<String>,
+    /// `capture NAME`: on entering the state, the tool point's pose (base frame) is stored under
+    /// NAME for the rest of the run; entering again overwrites it. Left out of the JSON when
+    /// `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capture: Option<String>,
     /// The compliant frame in which selection and stiffness are given.
     pub frame: FrameRef,
     /// Per axis (`x y z rx ry rz` of `frame`): position (`true`, S = 1) or force control.

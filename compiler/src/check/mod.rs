@@ -7,9 +7,10 @@
 //! call arguments), [`scope`] (names), [`learn`], [`segments`], [`frames`] and [`forces`]
 //! (the learn block, whose functions [`signatures`] lists), [`limits`] (the supervisor's
 //! limits of a skill or a task step), [`params`] (skill parameters, substituted into the states
-//! and limits before they are checked), [`states`], [`guards`] and [`reach`] (the state
-//! machine), and [`task`].
+//! and limits before they are checked), [`states`], [`guards`], [`captures`] (`capture NAME`
+//! and `move M at NAME`) and [`reach`] (the state machine), and [`task`].
 
+mod captures;
 mod forces;
 mod frames;
 mod guards;

@@ -373,7 +373,7 @@ fn substitute_body(skill: &mut ast::Skill, values: &HashMap<&str, &ast::Expr>, u
                         put(max);
                     }
                 }
-                StmtKind::Move { .. } | StmtKind::Control { .. } | StmtKind::Apply(_) => {}
+                StmtKind::Move { .. } | StmtKind::Control { .. } | StmtKind::Apply(_) | StmtKind::Capture(_) => {}
             }
         }
     }

@@ -55,6 +55,9 @@ pub(super) struct SkillScope {
     pub(super) state_ids: HashMap<String, u32>,
     /// The states' names in order.
     pub(super) state_names: Vec<String>,
+    /// Every name a state captures (`capture NAME`), with where it is first captured and
+    /// whether a `move ... at NAME` uses it.
+    pub(super) captures: Vec<super::captures::Capture>,
 }
 
 impl Checker<'_> {

@@ -76,6 +76,7 @@ impl Checker<'_> {
         let state_names: Vec<&str> = unique.iter().map(|s| s.name.name.as_str()).collect();
         scope.state_ids = ids.iter().map(|(name, (id, _))| (name.to_string(), id.0)).collect();
         scope.state_names = state_names.iter().map(|name| name.to_string()).collect();
+        self.collect_captures(skill, &unique, scope);
 
         let mut states = Vec::new();
         let mut transitions = Vec::new();
@@ -149,7 +150,9 @@ impl Checker<'_> {
                 .map(|state| matches!(state.body, ast::StateBody::Terminal { .. }))
                 .collect();
             self.graph(&unique, &successors, &terminal);
+            self.at_before_capture(&unique, &successors, scope);
         }
+        self.unused_captures(scope);
         (states, transitions, Some(ir::StateId(0)))
     }
 
@@ -168,6 +171,8 @@ impl Checker<'_> {
         let mut seen: HashMap<&'static str, Span> = HashMap::new();
         let mut motion = None;
         let mut motion_relative = false;
+        let mut motion_at = None;
+        let mut capture = None;
         let mut frame = ir::FrameRef::Base;
         let mut position_controlled = [true; 6];
         let mut control_span = None;
@@ -196,6 +201,7 @@ impl Checker<'_> {
                 StmtKind::Approach { .. } => Some("approach"),
                 StmtKind::LiftOff { .. } => Some("lift off"),
                 StmtKind::Repeat(_) => Some("repeat"),
+                StmtKind::Capture(_) => Some("capture"),
                 StmtKind::Transition { .. } => None,
             };
             if let Some(keyword) = keyword {
@@ -208,7 +214,10 @@ impl Checker<'_> {
                             "second one",
                         )
                         .label(*earlier, "first one here")
-                        .help(format!("a state has at most one `{keyword}`; merge them"));
+                        .help(match keyword {
+                            "capture" => "a state captures one pose, its entry pose: keep one name for it".to_string(),
+                            _ => format!("a state has at most one `{keyword}`; merge them"),
+                        });
                     self.report(diag);
                     continue;
                 }
@@ -216,11 +225,18 @@ impl Checker<'_> {
             }
             match &stmt.kind {
                 StmtKind::Move {
-                    motion: name, relative, ..
+                    motion: name,
+                    relative,
+                    at,
+                    ..
                 } => {
                     motion = self.resolve(name, SymKind::Motion, scope).map(ir::MotionId);
                     motion_relative = *relative;
+                    if let Some(at) = at {
+                        motion_at = self.move_at(name, at, *relative, scope);
+                    }
                 }
+                StmtKind::Capture(name) => capture = Some(name.name.clone()),
                 StmtKind::Control {
                     groups,
                     frame: frame_name,
@@ -368,6 +384,8 @@ impl Checker<'_> {
         Some(ir::ActiveState {
             motion,
             motion_relative,
+            motion_at,
+            capture,
             frame,
             position_controlled,
             stiffness,

@@ -388,7 +388,8 @@ impl Checker<'_> {
                     )
                     .help(
                         "`at` moves the goal of the first state's `move` (not a `move ... relative`, which starts \
-                         where the tool is); give the first state such a `move`, or use `goal_offset`",
+                         where the tool is, nor a `move ... at NAME`, placed by its capture); give the first state \
+                         such a `move`, or use `goal_offset`",
                     );
                 self.report(diag);
                 ok = false;
@@ -409,9 +410,16 @@ impl<'s> SkillFacts<'s> {
             .iter()
             .find(|state| matches!(state.body, ast::StateBody::Active(_)))
             .is_some_and(|state| match &state.body {
-                ast::StateBody::Active(stmts) => stmts
-                    .iter()
-                    .any(|stmt| matches!(stmt.kind, ast::StmtKind::Move { relative: false, .. })),
+                ast::StateBody::Active(stmts) => stmts.iter().any(|stmt| {
+                    matches!(
+                        stmt.kind,
+                        ast::StmtKind::Move {
+                            relative: false,
+                            at: None,
+                            ..
+                        }
+                    )
+                }),
                 ast::StateBody::Terminal { .. } => false,
             });
         SkillFacts {

@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3, Vector6};
 use skill_ir as ir;
 
 use super::bind::BoundSkill;
-use super::motion::{motion_start, start_profile, MotionRollout};
+use super::motion::{motion_start, offset_to_place, start_profile, MotionRollout};
 use super::rig::Rig;
 use super::run::ExecError;
 use crate::control::Command;
@@ -101,6 +101,9 @@ pub(super) struct Machine<'b, 'a> {
     /// each extension's axis): the surface or button they found is that much farther than
     /// demonstrated, so later motions that are not `relative` move their goals by it too.
     found_offset: Vector3<f64>,
+    /// The tool point's pose (base frame) on the last entry of each state that captures a
+    /// name (`capture NAME`), by name: `move M at NAME` ends there.
+    captures: HashMap<String, Isometry3<f64>>,
 }
 
 /// Where a held guard (`G for D`) sits: the index of its transition and its place in a
@@ -307,6 +310,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             guard_holds: Vec::new(),
             entries: vec![0; skill.states.len()],
             found_offset: Vector3::zeros(),
+            captures: HashMap::new(),
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -358,6 +362,9 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.held = flange;
         self.entry_tool = rig.tool();
         let Some(active) = self.active() else { return Ok(()) };
+        if let Some(name) = &active.capture {
+            self.captures.insert(name.clone(), self.entry_tool);
+        }
         self.guarded = guarded_approach(self.skill(), active);
         let applied = rig.controller.state().applied.fixed_rows::<3>(0).into_owned();
         let forcing = active.position_controlled.contains(&false);
@@ -402,7 +409,10 @@ impl<'b, 'a> Machine<'b, 'a> {
             // motion's demonstrated start. A task step's `goal_offset` is not added again: the
             // entry pose carries it already (the state began where the offset goals led). Other
             // motions move by the step's offset and by what earlier extensions found.
-            let offset = if active.motion_relative {
+            // `move M at NAME`: the goal moves to where the tool point was captured.
+            let offset = if let Some(name) = &active.motion_at {
+                self.capture_offset(name, motion_id, rig.flange_to_tool())?
+            } else if active.motion_relative {
                 flange.translation.vector - motion_start(learned).translation.vector
             } else {
                 Vector3::from(self.overrides.goal_offset_m) + self.found_offset
@@ -451,6 +461,51 @@ impl<'b, 'a> Machine<'b, 'a> {
             }
         }
         Ok(())
+    }
+
+    /// The goal offset that ends motion `motion_id` of the current state at capture `name`; an
+    /// error naming the capture and the state when the run has not captured it.
+    fn capture_offset(
+        &self,
+        name: &str,
+        motion_id: ir::MotionId,
+        flange_to_tool: &Isometry3<f64>,
+    ) -> Result<Vector3<f64>, ExecError> {
+        let motion_name = &self.skill().learn.motions[motion_id.index()].name;
+        let Some(pose) = self.captures.get(name) else {
+            let capturing: Vec<String> = self
+                .skill()
+                .states
+                .iter()
+                .filter(|state| match &state.kind {
+                    ir::StateKind::Active(active) => active.capture.as_deref() == Some(name),
+                    ir::StateKind::Terminal { .. } => false,
+                })
+                .map(|state| format!("`{}`", state.name))
+                .collect();
+            let where_ = match capturing.is_empty() {
+                true => "no state captures it".to_string(),
+                false => format!("`capture {name}` is in {}, not entered before", capturing.join(", ")),
+            };
+            return Err(ExecError::NotCaptured {
+                state: self.state().name.clone(),
+                message: format!(
+                    "state `{}` moves `{motion_name}` at `{name}`, but the run has not captured `{name}` ({where_})",
+                    self.state().name
+                ),
+            });
+        };
+        offset_to_place(
+            self.bound.motions[motion_id.index()],
+            pose.translation.vector.into(),
+            flange_to_tool,
+        )
+        .map(Vector3::from)
+        .ok_or_else(|| ExecError::Motion {
+            state: self.state().name.clone(),
+            motion: motion_name.clone(),
+            reason: "its goal is not a position to place".to_string(),
+        })
     }
 
     /// The error for a motion or force profile `name` of the current state that could not be set up.

@@ -111,6 +111,23 @@ pub(super) fn start_profile(dmp: &Dmp, speed: f64) -> Result<DmpRollout, DmpErro
     Ok(rollout)
 }
 
+/// The goal offset that makes `motion` end with the tool point at `at` (base frame \[m\]): `at`
+/// minus where the tool point is at the learned goal (the flange's goal position and orientation
+/// with `flange_to_tool`), `None` when the goal is not a point. The one rule by which a task
+/// step's `at: STEP.STATE` and a state's `move M at NAME` place a motion; its orientation goal
+/// stays.
+pub(super) fn offset_to_place(
+    motion: &LearnedMotion,
+    at: [f64; 3],
+    flange_to_tool: &Isometry3<f64>,
+) -> Option<[f64; 3]> {
+    let goal = &motion.position.goal;
+    (goal.len() == 3).then(|| {
+        let tool_goal = Vector3::from_column_slice(goal) + motion.orientation.goal * flange_to_tool.translation.vector;
+        std::array::from_fn(|axis| at[axis] - tool_goal[axis])
+    })
+}
+
 /// The flange pose at the start of a learned motion.
 pub(super) fn motion_start(motion: &LearnedMotion) -> Isometry3<f64> {
     let p = &motion.position.start;

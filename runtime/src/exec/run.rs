@@ -90,6 +90,15 @@ pub enum ExecError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A state moves `at NAME` before the run has captured NAME. `run_skill` turns this into a
+    /// failed [`RunReport`] whose message names the capture, the state and its `.skill` line.
+    #[error("{message}")]
+    NotCaptured {
+        /// The state that moves at the capture.
+        state: String,
+        /// The capture and where it is made, in words.
+        message: String,
+    },
     /// The supervisor stopped the arm. `run_skill` and `run_replay` turn this into a failed
     /// [`RunReport`]; callers of lower-level functions see it as an error.
     #[error("reflex stop in `{state}`: {violation}")]
@@ -277,6 +286,25 @@ fn finish(
                 visits,
                 duration_s,
                 reflex: Some(*violation),
+                safety: SafetyStats::default(),
+            }
+        }
+        Err(ExecError::NotCaptured { state, message }) => {
+            let duration_s = rig.time_s() - start_s;
+            if let Some(last) = visits.last_mut() {
+                last.exit_s = duration_s;
+            }
+            let message = match location_of(&state) {
+                Some(location) => format!("{message} ({location})"),
+                None => message,
+            };
+            RunReport {
+                outcome: ir::Outcome::Failure,
+                terminal: None,
+                message,
+                visits,
+                duration_s,
+                reflex: None,
                 safety: SafetyStats::default(),
             }
         }

@@ -2,6 +2,7 @@
 //! Used by `skillc run` and `skillc eval`.
 
 use super::log::csv;
+use super::motion::offset_to_place;
 use super::{run_replay, run_skill, BoundSkill, ExecError, ExecOptions, Rig, RunLog, RunReport};
 use crate::control::{ControllerGains, HybridController};
 use crate::plant::Plant;
@@ -147,7 +148,7 @@ fn task_on(
             let step = task_step.step;
             let mut overrides = step.overrides;
             if let Some(anchor) = &step.at {
-                match anchor_offset(anchor, &task_step.bound, reports) {
+                match anchor_offset(anchor, &task_step.bound, reports, rig.flange_to_tool()) {
                     Ok(offset) => {
                         for (total, extra) in overrides.goal_offset_m.iter_mut().zip(offset) {
                             *total += extra;
@@ -206,13 +207,15 @@ fn task_on(
     })
 }
 
-/// The goal offset `at: STEP.STATE` gives a step: from the goal of its first state's motion to
-/// where the tool point was when the earlier step first entered that state. An error message
+/// The goal offset `at: STEP.STATE` gives a step: from where the goal of its first state's motion
+/// puts the tool point to where the tool point was when the earlier step first entered that state
+/// ([`offset_to_place`]). An error message
 /// when that step did not run or never entered the state, or the skill starts without a motion.
 fn anchor_offset(
     anchor: &skill_ir::Anchor,
     bound: &BoundSkill<'_>,
     earlier: &[StepReport],
+    flange_to_tool: &nalgebra::Isometry3<f64>,
 ) -> Result<[f64; 3], String> {
     let Some(found) = earlier
         .iter()
@@ -231,15 +234,16 @@ fn anchor_offset(
         ));
     };
     let initial = &bound.skill.states[bound.skill.initial.index()];
-    let goal = match &initial.kind {
-        skill_ir::StateKind::Active(active) => active.motion.map(|id| &bound.motions[id.index()].position.goal),
+    let offset = match &initial.kind {
+        skill_ir::StateKind::Active(active) => active
+            .motion
+            .and_then(|id| offset_to_place(bound.motions[id.index()], visit.enter_position_m, flange_to_tool)),
         skill_ir::StateKind::Terminal { .. } => None,
     };
-    let Some(goal) = goal.filter(|goal| goal.len() == 3) else {
-        return Err(format!(
+    offset.ok_or_else(|| {
+        format!(
             "it starts at `{}.{}`, but its first state `{}` runs no motion to place there",
             anchor.step, anchor.state, initial.name
-        ));
-    };
-    Ok(std::array::from_fn(|axis| visit.enter_position_m[axis] - goal[axis]))
+        )
+    })
 }

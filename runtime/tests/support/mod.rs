@@ -91,6 +91,8 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
             ir::StateKind::Active(Box::new(ir::ActiveState {
                 motion: motion.map(ir::MotionId),
                 motion_relative: false,
+                motion_at: None,
+                capture: None,
                 frame: contact,
                 position_controlled,
                 stiffness,

@@ -12,6 +12,6 @@ pub mod validate;
 
 pub use learn::{learn_skill, LearnError, LearnOptions, DEFAULT_FRICTION_MU};
 pub use learned::{
-    ir_hash, ContactBoundaries, FrameKind, FrameOrigin, FramePose, Learned, LearnedForce, LearnedFrame, LearnedMotion, LearnedSegment,
-    NormalCheck, Quality, LEARNED_VERSION,
+    ir_hash, ContactBoundaries, FrameKind, FrameOrigin, FramePose, Learned, LearnedForce, LearnedFrame, LearnedMotion,
+    LearnedSegment, NormalCheck, Quality, LEARNED_VERSION,
 };

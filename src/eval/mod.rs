@@ -167,6 +167,85 @@ pub struct Criteria {
 /// The default [`Criteria::peak_force`]: twice the demonstrated peak plus 5 N.
 pub const DEFAULT_PEAK_BOUND: [f64; 2] = [2.0, 5.0];
 
+impl Criteria {
+    /// The peak force a run may reach \[N\]: `a × demo_peak_n + b` from [`Criteria::peak_force`].
+    pub fn peak_bound(&self, demo_peak_n: f64) -> f64 {
+        let [scale, offset] = self.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
+        scale * demo_peak_n + offset
+    }
+
+    /// The first criterion a run that reached its success state misses, in the trials' order
+    /// (peak force, force RMS, contact share, stop force): its reason (`criterion:...`) and
+    /// what was measured against what. `demo_peak_n` is the demonstration's peak force, `None`
+    /// for a run the peak bound does not apply to (a replay); `learned_force` the learned
+    /// contact force the stop force is judged against.
+    pub fn missed(
+        &self,
+        measured: &Metrics,
+        learned_force: Option<f64>,
+        demo_peak_n: Option<f64>,
+    ) -> Option<(String, String)> {
+        let percent = |value: Option<f64>| value.map_or("none".to_string(), |v| format!("{:.1} %", v * 100.0));
+        if let Some(demo_peak) = demo_peak_n {
+            let bound = self.peak_bound(demo_peak);
+            if measured.peak_force_n > bound {
+                let [scale, offset] = self.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
+                return Some((
+                    "criterion:peak_force".to_string(),
+                    format!(
+                        "peak force {:.1} N above the bound {bound:.1} N ({scale} × the demonstration's {demo_peak:.1} N + {offset} N)",
+                        measured.peak_force_n
+                    ),
+                ));
+            }
+        }
+        if let Some(max) = self
+            .force_rms_rel
+            .filter(|max| !measured.force_rms_rel.is_some_and(|v| v <= *max))
+        {
+            return Some((
+                "criterion:force_rms".to_string(),
+                format!(
+                    "force RMS {} of the learned force, above {:.1} %",
+                    percent(measured.force_rms_rel),
+                    max * 100.0
+                ),
+            ));
+        }
+        if let Some(min) = self
+            .contact_share
+            .filter(|min| !measured.contact_share.is_some_and(|v| v >= *min))
+        {
+            return Some((
+                "criterion:contact_share".to_string(),
+                format!(
+                    "in contact for {} of the contact phase, below {:.1} %",
+                    percent(measured.contact_share),
+                    min * 100.0
+                ),
+            ));
+        }
+        if let (Some(max), Some(learned)) = (self.stop_force_rel, learned_force) {
+            let met = measured
+                .stop_force_n
+                .is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
+            if !met {
+                return Some((
+                    "criterion:stop_force".to_string(),
+                    format!(
+                        "stop force {} against the learned {learned:.2} N, beyond ±{:.1} %",
+                        measured
+                            .stop_force_n
+                            .map_or("none".to_string(), |f| format!("{f:.2} N")),
+                        max * 100.0
+                    ),
+                ));
+            }
+        }
+        None
+    }
+}
+
 /// The version of `summary.json`'s layout; bumped on every change to its keys.
 pub const SUMMARY_VERSION: u32 = 4;
 
@@ -278,6 +357,39 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// An error row: trial `name` / `variant` in `mode` (`skill`, `replay`, `task`) could not
+    /// run, with scene overrides `set`.
+    pub(crate) fn error(name: &str, variant: &str, mode: &str, set: Vec<String>, message: String) -> Self {
+        Outcome {
+            result: TrialResult {
+                skill: name.to_string(),
+                variant: variant.to_string(),
+                mode: mode.to_string(),
+                success: false,
+                force_rms_rel: None,
+                contact_share: None,
+                peak_force_n: 0.0,
+                stop_force_n: None,
+                learned_force_n: None,
+                goal_error_m: 0.0,
+                duration_s: 0.0,
+                message,
+                reason: Some("error".to_string()),
+                peak_bound_n: None,
+                peak_tool_speed_mps: 0.0,
+                min_joint_margin_rad: 0.0,
+                torque_limit_s: 0.0,
+                error: true,
+                states: Vec::new(),
+                draw: None,
+                set,
+                steps: Vec::new(),
+            },
+            log: RunLog::default(),
+            step_logs: Vec::new(),
+        }
+    }
+
     /// The trial as the plots draw it.
     pub fn trial(&self) -> plot::Trial<'_> {
         plot::Trial {
@@ -412,34 +524,8 @@ fn run_job(
     limits: &[(String, f64)],
 ) -> Outcome {
     let mode_name = if replay { "replay" } else { "skill" };
-    let failed = |message: String| Outcome {
-        result: TrialResult {
-            skill: prepared.name.clone(),
-            variant: variant.name.clone(),
-            mode: mode_name.to_string(),
-            success: false,
-            force_rms_rel: None,
-            contact_share: None,
-            peak_force_n: 0.0,
-            stop_force_n: None,
-            learned_force_n: None,
-            goal_error_m: 0.0,
-            duration_s: 0.0,
-            message,
-            reason: Some("error".to_string()),
-            peak_bound_n: None,
-            peak_tool_speed_mps: 0.0,
-            min_joint_margin_rad: 0.0,
-            torque_limit_s: 0.0,
-            error: true,
-            states: Vec::new(),
-            draw: None,
-            set: variant.set.clone(),
-            steps: Vec::new(),
-        },
-        log: RunLog::default(),
-        step_logs: Vec::new(),
-    };
+    let failed =
+        |message: String| Outcome::error(&prepared.name, &variant.name, mode_name, variant.set.clone(), message);
     let (specialised, variant_bound);
     let (bound, plan) = match bound {
         Ok(parts) if variant.params.is_empty() => (&parts.0, &parts.1),
@@ -503,33 +589,18 @@ fn run_job(
     let metrics: Metrics = metrics::measure(&log, plan, replay, &frame_z);
     let learned_force = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01).peak());
     let criteria = prepared.spec.criteria;
-    let [scale, offset] = criteria.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
-    let peak_bound = (!replay).then_some(scale * prepared.demo_peak_n + offset);
+    let peak_bound = (!replay).then(|| criteria.peak_bound(prepared.demo_peak_n));
     // The first reason a trial fails, in order of gravity. Replays are the baseline: they are
     // never a success, and their reason says why they would have failed.
     let reason = if let Some(violation) = &report.reflex {
         Some(format!("reflex:{}", violation.quantity.name()))
     } else if report.outcome != skill_ir::Outcome::Success {
         Some("failure_state".to_string())
-    } else if peak_bound.is_some_and(|bound| metrics.peak_force_n > bound) {
-        Some("criterion:peak_force".to_string())
-    } else if criteria
-        .force_rms_rel
-        .is_some_and(|max| !metrics.force_rms_rel.is_some_and(|v| v <= max))
-    {
-        Some("criterion:force_rms".to_string())
-    } else if criteria
-        .contact_share
-        .is_some_and(|min| !metrics.contact_share.is_some_and(|v| v >= min))
-    {
-        Some("criterion:contact_share".to_string())
-    } else if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
-        let met = metrics
-            .stop_force_n
-            .is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
-        (!met).then(|| "criterion:stop_force".to_string())
     } else {
-        None
+        let demo_peak = (!replay).then_some(prepared.demo_peak_n);
+        criteria
+            .missed(&metrics, learned_force, demo_peak)
+            .map(|(reason, _)| reason)
     };
     let success = !replay && reason.is_none();
     let safety = &report.safety;

@@ -205,7 +205,7 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
             result.force_rms_rel = metrics.force_rms_rel;
             result.contact_share = metrics.contact_share;
             let demo_peak = demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max);
-            result.peak_force_n = Some([metrics.peak_force_n, 2.0 * demo_peak + 5.0]);
+            result.peak_force_n = Some([metrics.peak_force_n, super::Criteria::default().peak_bound(demo_peak)]);
             result.reproduction = Some(format!("{:?}: {}", report.outcome, report.message));
         }
         Err(err) => result.reproduction = Some(error_chain(&err)),

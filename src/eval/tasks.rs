@@ -13,7 +13,7 @@ use skill_runtime::exec::{bind, simulate_task, BoundSkill, ExecOptions, RunLog, 
 use skill_runtime::skill::{LearnOptions, Learned};
 
 use super::metrics::{self, ContactPlan};
-use super::{robot, Criteria, Outcome, TrialResult, Variant, DEFAULT_PEAK_BOUND};
+use super::{robot, Criteria, Outcome, TrialResult, Variant};
 use crate::load::{error_chain, learn_from_files, load_program_with, load_scene, Failure};
 use crate::profile::DesiredProfile;
 
@@ -339,34 +339,7 @@ pub(super) fn prepare(
 
 /// An error row: the trial could not run.
 fn failed(prepared: &PreparedTask, variant: &Variant, sets: Vec<String>, message: String) -> Outcome {
-    Outcome {
-        result: TrialResult {
-            skill: prepared.name.clone(),
-            variant: variant.name.clone(),
-            mode: "task".to_string(),
-            success: false,
-            force_rms_rel: None,
-            contact_share: None,
-            peak_force_n: 0.0,
-            stop_force_n: None,
-            learned_force_n: None,
-            goal_error_m: 0.0,
-            duration_s: 0.0,
-            message,
-            reason: Some("error".to_string()),
-            peak_bound_n: None,
-            peak_tool_speed_mps: 0.0,
-            min_joint_margin_rad: 0.0,
-            torque_limit_s: 0.0,
-            error: true,
-            states: Vec::new(),
-            draw: None,
-            set: sets,
-            steps: Vec::new(),
-        },
-        log: RunLog::default(),
-        step_logs: Vec::new(),
-    }
+    Outcome::error(&prepared.name, &variant.name, "task", sets, message)
 }
 
 /// Binds every step of `steps` to what it learned.
@@ -583,10 +556,8 @@ fn judge_step(
     let plan = ContactPlan::of(bound);
     let measured = metrics::measure(&report.log, &plan, false, &|_| Vector3::z());
     let learned_force = plan.force.as_ref().map(|force| DesiredProfile::new(force, 0.01).peak());
-    let [scale, offset] = criteria.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
-    let peak_bound = scale * learned.demo_peak_n + offset;
+    let peak_bound = criteria.peak_bound(learned.demo_peak_n);
     let run = &report.report;
-    let percent = |value: Option<f64>| value.map_or("none".to_string(), |v| format!("{:.1} %", v * 100.0));
     // The first reason the step fails, in the skill trials' order, with what was measured.
     let (reason, detail) = if let Some(violation) = &run.reflex {
         (Some(format!("reflex:{}", violation.quantity.name())), None)
@@ -598,58 +569,10 @@ fn judge_step(
             Some(format!("terminal:{}", run.terminal.as_deref().unwrap_or("none"))),
             None,
         )
-    } else if measured.peak_force_n > peak_bound {
-        (
-            Some("criterion:peak_force".to_string()),
-            Some(format!(
-                "peak force {:.1} N above the bound {peak_bound:.1} N ({scale} × the demonstration's {:.1} N + {offset} N)",
-                measured.peak_force_n, learned.demo_peak_n
-            )),
-        )
-    } else if let Some(max) = criteria
-        .force_rms_rel
-        .filter(|max| !measured.force_rms_rel.is_some_and(|v| v <= *max))
-    {
-        (
-            Some("criterion:force_rms".to_string()),
-            Some(format!(
-                "force RMS {} of the learned force, above {:.1} %",
-                percent(measured.force_rms_rel),
-                max * 100.0
-            )),
-        )
-    } else if let Some(min) = criteria
-        .contact_share
-        .filter(|min| !measured.contact_share.is_some_and(|v| v >= *min))
-    {
-        (
-            Some("criterion:contact_share".to_string()),
-            Some(format!(
-                "in contact for {} of the contact phase, below {:.1} %",
-                percent(measured.contact_share),
-                min * 100.0
-            )),
-        )
-    } else if let (Some(max), Some(learned)) = (criteria.stop_force_rel, learned_force) {
-        let met = measured
-            .stop_force_n
-            .is_some_and(|f| learned > 0.0 && ((f - learned) / learned).abs() <= max);
-        if met {
-            (None, None)
-        } else {
-            (
-                Some("criterion:stop_force".to_string()),
-                Some(format!(
-                    "stop force {} against the learned {learned:.2} N, beyond ±{:.1} %",
-                    measured
-                        .stop_force_n
-                        .map_or("none".to_string(), |f| format!("{f:.2} N")),
-                    max * 100.0
-                )),
-            )
-        }
     } else {
-        (None, None)
+        criteria
+            .missed(&measured, learned_force, Some(learned.demo_peak_n))
+            .map_or((None, None), |(reason, detail)| (Some(reason), Some(detail)))
     };
     let message = match detail {
         Some(detail) => format!("{}; {detail}", run.message),

@@ -272,41 +272,34 @@ fn finish(
     start_s: f64,
     location_of: impl Fn(&str) -> Option<String>,
 ) -> Result<RunReport, ExecError> {
+    // A run stopped on the way: the last visit ends now, the run is a failure without a terminal.
+    let stopped = |message: String, reflex: Option<Violation>| {
+        let duration_s = rig.time_s() - start_s;
+        if let Some(last) = visits.last_mut() {
+            last.exit_s = duration_s;
+        }
+        RunReport {
+            outcome: ir::Outcome::Failure,
+            terminal: None,
+            message,
+            visits,
+            duration_s,
+            reflex,
+            safety: SafetyStats::default(),
+        }
+    };
     let mut report = match result {
         Ok(report) => report,
-        Err(ExecError::Reflex { state, violation }) => {
-            let duration_s = rig.time_s() - start_s;
-            if let Some(last) = visits.last_mut() {
-                last.exit_s = duration_s;
-            }
-            RunReport {
-                outcome: ir::Outcome::Failure,
-                terminal: None,
-                message: reflex_message(&violation, &state, location_of(&state).as_deref()),
-                visits,
-                duration_s,
-                reflex: Some(*violation),
-                safety: SafetyStats::default(),
-            }
-        }
+        Err(ExecError::Reflex { state, violation }) => stopped(
+            reflex_message(&violation, &state, location_of(&state).as_deref()),
+            Some(*violation),
+        ),
         Err(ExecError::NotCaptured { state, message }) => {
-            let duration_s = rig.time_s() - start_s;
-            if let Some(last) = visits.last_mut() {
-                last.exit_s = duration_s;
-            }
             let message = match location_of(&state) {
                 Some(location) => format!("{message} ({location})"),
                 None => message,
             };
-            RunReport {
-                outcome: ir::Outcome::Failure,
-                terminal: None,
-                message,
-                visits,
-                duration_s,
-                reflex: None,
-                safety: SafetyStats::default(),
-            }
+            stopped(message, None)
         }
         Err(other) => return Err(other),
     };

@@ -290,30 +290,39 @@ impl Link {
     }
 }
 
-/// The links of every cluster in one arena, cluster `x`'s at `at[x]..at[x] + len[x]`. Every
-/// link knows where its twin (the neighbour's link back) is, so a merge updates a neighbour's
-/// links in place without searching them. Clusters are laid out in sample order, so neighbours
-/// in time have their links close in memory.
+/// The links of every cluster in one arena, cluster `x`'s at `head[x].at..head[x].at +
+/// head[x].len`. Every link knows where its twin (the neighbour's link back) is, so a merge
+/// updates a neighbour's links in place without searching them. Clusters are laid out in sample
+/// order, so neighbours in time have their links close in memory; a cluster's position, length
+/// and capacity share one record, so finding its links costs one cache miss, not three.
 struct Links {
     arena: Vec<Link>,
-    at: Vec<u32>,
-    len: Vec<u32>,
-    cap: Vec<u32>,
+    head: Vec<Head>,
+}
+
+/// Where a cluster's links lie in the arena: `len` links from `at`, room for `cap`.
+#[derive(Debug, Clone, Copy)]
+struct Head {
+    at: u32,
+    len: u32,
+    cap: u32,
 }
 
 impl Links {
     fn range(&self, x: usize) -> std::ops::Range<usize> {
-        self.at[x] as usize..(self.at[x] + self.len[x]) as usize
+        let Head { at, len, .. } = self.head[x];
+        at as usize..(at + len) as usize
     }
 
     /// Replaces cluster `x`'s links, moving them to the end of the arena when they do not fit,
     /// and points every twin at its link's new position.
     fn replace(&mut self, x: usize, links: &[Link]) {
         let len = links.len() as u32;
-        if len > self.cap[x] {
-            self.cap[x] = len.max(2 * self.cap[x]);
-            self.at[x] = self.arena.len() as u32;
-            let new_len = self.arena.len() + self.cap[x] as usize;
+        let head = &mut self.head[x];
+        if len > head.cap {
+            head.cap = len.max(2 * head.cap);
+            head.at = self.arena.len() as u32;
+            let new_len = self.arena.len() + head.cap as usize;
             self.arena.resize(
                 new_len,
                 Link {
@@ -323,9 +332,9 @@ impl Links {
                 },
             );
         }
-        let at = self.at[x] as usize;
+        head.len = len;
+        let at = head.at as usize;
         self.arena[at..at + links.len()].copy_from_slice(links);
-        self.len[x] = len;
         for (pos, link) in (at..).zip(links) {
             self.arena[link.twin as usize].twin = pos as u32;
         }
@@ -334,8 +343,9 @@ impl Links {
     /// Removes the link at `pos` of cluster `x` by moving its last link into the hole; returns
     /// the position the last link came from (`pos` itself when it was the last).
     fn swap_remove(&mut self, x: usize, pos: usize) -> usize {
-        let last = (self.at[x] + self.len[x] - 1) as usize;
-        self.len[x] -= 1;
+        let head = &mut self.head[x];
+        let last = (head.at + head.len - 1) as usize;
+        head.len -= 1;
         if last != pos {
             let moved = self.arena[last];
             self.arena[pos] = moved;
@@ -436,12 +446,19 @@ impl Tournament {
 pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) -> Vec<(f64, usize, usize)> {
     let n = data.len() / dims;
     assert!(n < OWNED as usize, "fewer than 2^31 samples (checked by `cluster`)");
-    let mut size = vec![1.0f64; n];
+    // Row x is cluster x's size and mean, `[size, mean...]`: a neighbour's Ward distance needs
+    // both, and one row is one or two adjacent cache lines where two arrays cost two misses.
+    // The mean is kept as `sum / size` so that a distance needs no division per column (the
+    // same operations as dividing each time, so the same bits).
+    let stride = dims + 1;
+    let mut rows = vec![1.0f64; n * stride];
+    for (row, sample) in rows.chunks_exact_mut(stride).zip(data.chunks_exact(dims)) {
+        row[1..].copy_from_slice(sample);
+    }
     let mut sum = data.to_vec();
-    // Cluster means `sum / size`, kept so that a Ward distance needs no division per column
-    // (the same operations as dividing each time, so the same bits).
-    let mut mean = data.to_vec();
-    let cap = 2 * k as u32 + 2;
+    // A sample starts with at most 2k links, and the union of two neighbours in time has no
+    // more; a cluster that outgrows its room moves to the arena's end (`Links::replace`).
+    let cap = 2 * k as u32;
     let mut links = Links {
         arena: vec![
             Link {
@@ -451,9 +468,13 @@ pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: 
             };
             n * cap as usize
         ],
-        at: (0..n as u32).map(|x| x * cap).collect(),
-        len: vec![0; n],
-        cap: vec![cap; n],
+        head: (0..n as u32)
+            .map(|x| Head {
+                at: x * cap,
+                len: 0,
+                cap,
+            })
+            .collect(),
     };
     for i in 0..n {
         for j in i + 1..(i + k + 1).min(n) {
@@ -463,7 +484,8 @@ pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: 
                 .map(|(a, b)| (a - b).powi(2))
                 .sum::<f64>()
                 .sqrt();
-            let (pi, pj) = (links.at[i] + links.len[i], links.at[j] + links.len[j]);
+            let (hi, hj) = (links.head[i], links.head[j]);
+            let (pi, pj) = (hi.at + hi.len, hj.at + hj.len);
             links.arena[pi as usize] = Link {
                 other: j as u32 | OWNED,
                 twin: pj,
@@ -474,50 +496,47 @@ pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: 
                 twin: pi,
                 dist,
             };
-            links.len[i] += 1;
-            links.len[j] += 1;
+            links.head[i].len += 1;
+            links.head[j].len += 1;
         }
     }
     let best: Vec<(f64, u32)> = (0..n).map(|x| links.best_owned(x)).collect();
     let mut tournament = Tournament::new(&best);
     let mut merges = Vec::with_capacity(n.saturating_sub(1));
     // Per neighbour c of the union: c, distance to a, distance to b, and the positions of c's
-    // links back to a and to b; `slot[c]` is c's index here while a merge is being processed.
+    // links back to a and to b. A cluster lists each neighbour once, so only b's neighbours are
+    // looked up among a's, in this short list (kept in L1) rather than in a per-cluster array.
     let mut merged: Vec<Neighbour> = Vec::new();
-    let mut slot = vec![NONE; n];
     let mut new_links: Vec<Link> = Vec::new();
     while let Some((d_ab, a, b)) = tournament.top() {
         merged.clear();
-        for (x, skip) in [(a, b), (b, a)] {
-            for link in &links.arena[links.range(x)] {
-                let c = link.cluster();
-                if c == skip {
-                    continue;
-                }
-                let index = match slot[c] {
-                    NONE => {
-                        slot[c] = merged.len() as u32;
-                        merged.push(Neighbour {
-                            c: c as u32,
-                            to_a: None,
-                            to_b: None,
-                        });
-                        merged.len() - 1
-                    }
-                    index => index as usize,
-                };
-                let back = Some((link.dist, link.twin));
-                if x == a {
-                    merged[index].to_a = back;
-                } else {
-                    merged[index].to_b = back;
-                }
+        for link in &links.arena[links.range(a)] {
+            let c = link.cluster();
+            if c != b {
+                merged.push(Neighbour {
+                    c: c as u32,
+                    to_a: Some((link.dist, link.twin)),
+                    to_b: None,
+                });
             }
         }
-        for neighbour in &merged {
-            slot[neighbour.c as usize] = NONE;
+        let from_a = merged.len();
+        for link in &links.arena[links.range(b)] {
+            let c = link.cluster();
+            if c == a {
+                continue;
+            }
+            let back = Some((link.dist, link.twin));
+            match merged[..from_a].iter_mut().find(|neighbour| neighbour.c == c as u32) {
+                Some(neighbour) => neighbour.to_b = back,
+                None => merged.push(Neighbour {
+                    c: c as u32,
+                    to_a: None,
+                    to_b: back,
+                }),
+            }
         }
-        let (n_a, n_b) = (size[a], size[b]);
+        let (n_a, n_b) = (rows[a * stride], rows[b * stride]);
         let (head, tail) = sum.split_at_mut(b.max(a) * dims);
         let (sum_a, sum_b) = if a < b {
             (&mut head[a * dims..(a + 1) * dims], &tail[..dims])
@@ -525,30 +544,29 @@ pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: 
             (&mut tail[..dims], &head[b * dims..(b + 1) * dims])
         };
         sum_a.iter_mut().zip(sum_b).for_each(|(x, y)| *x += y);
-        size[a] = n_a + n_b;
-        for (m, s) in mean[a * dims..(a + 1) * dims]
-            .iter_mut()
-            .zip(&sum[a * dims..(a + 1) * dims])
-        {
-            *m = s / size[a];
+        let size_a = n_a + n_b;
+        let row_a = &mut rows[a * stride..(a + 1) * stride];
+        row_a[0] = size_a;
+        for (m, s) in row_a[1..].iter_mut().zip(&sum[a * dims..(a + 1) * dims]) {
+            *m = s / size_a;
         }
         merges.push((d_ab, a, b));
-        links.len[b] = 0;
+        links.head[b].len = 0;
         new_links.clear();
         for neighbour in &merged {
             let c = neighbour.c as usize;
+            let n_c = rows[c * stride];
             let dist = match linkage {
                 Linkage::Ward => {
-                    let (n_a, n_c) = (size[a], size[c]);
-                    let dist2: f64 = mean[a * dims..(a + 1) * dims]
+                    let dist2: f64 = rows[a * stride + 1..(a + 1) * stride]
                         .iter()
-                        .zip(&mean[c * dims..(c + 1) * dims])
+                        .zip(&rows[c * stride + 1..(c + 1) * stride])
                         .map(|(x, y)| (x - y).powi(2))
                         .sum();
-                    (2.0 * n_a * n_c / (n_a + n_c) * dist2).sqrt()
+                    (2.0 * size_a * n_c / (size_a + n_c) * dist2).sqrt()
                 }
                 _ => match (neighbour.to_a, neighbour.to_b) {
-                    (Some((x, _)), Some((y, _))) => lance_williams(linkage, x, y, d_ab, n_a, n_b, size[c]),
+                    (Some((x, _)), Some((y, _))) => lance_williams(linkage, x, y, d_ab, n_a, n_b, n_c),
                     (Some((x, _)), None) | (None, Some((x, _))) => x,
                     (None, None) => unreachable!("a neighbour of a or b"),
                 },

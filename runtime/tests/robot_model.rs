@@ -269,8 +269,35 @@ fn mass_matrix_columns_match_newton_euler() {
 }
 
 #[test]
-fn prismatic_joint_dynamics_are_consistent() {
-    let urdf = r#"<robot name="slider">
+fn gravity_torques_match_newton_euler() {
+    let iiwa = skill_runtime::robot::IIWA14.load().expect("the shipped iiwa loads");
+    let slider = Robot::from_urdf_str(SLIDER_URDF, None).expect("valid urdf");
+    let mut tilted = lwr4();
+    tilted.set_gravity(Vector3::new(1.2, -0.7, -9.7));
+    for robot in [lwr4(), iiwa, slider, tilted] {
+        let n = robot.dof();
+        let mut data = robot.data();
+        let mut rng = Rng(29);
+        let (mut gravity, mut reference, zeros) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for _ in 0..50 {
+            let q = rng.vector(n, -2.5, 2.5);
+            robot.forward_kinematics(&mut data, &q);
+            robot.gravity_torques(&mut data, &mut gravity);
+            robot.inverse_dynamics(&mut data, &zeros, &zeros, &mut reference);
+            for i in 0..n {
+                assert!(
+                    (gravity[i] - reference[i]).abs() < 1e-12 * (1.0 + reference[i].abs()),
+                    "g[{i}] = {} against Newton-Euler {} at {q:?}",
+                    gravity[i],
+                    reference[i]
+                );
+            }
+        }
+    }
+}
+
+/// A prismatic joint carrying a revolute one.
+const SLIDER_URDF: &str = r#"<robot name="slider">
       <link name="base"/>
       <link name="carriage"><inertial><origin xyz="0.1 0 0"/><mass value="2"/>
         <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>
@@ -281,7 +308,10 @@ fn prismatic_joint_dynamics_are_consistent() {
       <joint name="turn" type="revolute"><parent link="carriage"/><child link="arm"/>
         <origin xyz="0.2 0 0"/><axis xyz="1 0 0"/><limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
     </robot>"#;
-    let robot = Robot::from_urdf_str(urdf, None).expect("valid urdf");
+
+#[test]
+fn prismatic_joint_dynamics_are_consistent() {
+    let robot = Robot::from_urdf_str(SLIDER_URDF, None).expect("valid urdf");
     let mut data = robot.data();
     robot.forward_kinematics(&mut data, &[0.3, 0.0]);
     let mut gravity = [0.0; 2];

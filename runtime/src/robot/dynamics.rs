@@ -1,5 +1,5 @@
-//! Rigid-body dynamics of the chain: recursive Newton-Euler (gravity, inverse dynamics, Coriolis)
-//! and the composite-rigid-body mass matrix.
+//! Rigid-body dynamics of the chain: recursive Newton-Euler (inverse dynamics, Coriolis), gravity
+//! torques from composite centres of mass, and the composite-rigid-body mass matrix.
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -9,12 +9,31 @@ impl Robot {
     /// Gravity torques g(q) (N m, N) at the configuration of the last
     /// [`Robot::forward_kinematics`]: the torques that hold the arm still.
     ///
+    /// One backward pass over composite masses: joint i holds the bodies i.. whose mass `M` and
+    /// first moment `H = Σ m c` (base frame) it carries, so a revolute joint at `p` with axis `a`
+    /// needs `−a · ((H − M p) × g)` and a prismatic one `−M a · g`. The same torques as Newton-Euler
+    /// with q̇ = q̈ = 0 (`runtime/tests/robot_model.rs`) for a tenth of its work: the controller
+    /// needs them every tick.
+    ///
     /// # Panics
     /// If `out.len()` differs from [`Robot::dof`].
     pub fn gravity_torques(&self, data: &mut RobotData, out: &mut [f64]) {
-        let zeros = std::mem::take(&mut data.zeros);
-        self.rnea(data, &zeros, &zeros, true, out);
-        data.zeros = zeros;
+        let n = self.dof();
+        assert_eq!(out.len(), n, "gravity torques need dof entries");
+        debug_assert!(data.kinematics_done, "call forward_kinematics first");
+        let mut mass = 0.0;
+        let mut first = Vector3::zeros();
+        for i in (0..n).rev() {
+            let body = &self.bodies[i];
+            let (rot, pos) = (&data.rot[i], &data.pos[i]);
+            mass += body.mass;
+            first += (rot * body.com + pos) * body.mass;
+            let axis = rot * body.axis;
+            out[i] = match body.kind {
+                JointKind::Revolute => -axis.dot(&(first - pos * mass).cross(&self.gravity)),
+                JointKind::Prismatic => -mass * axis.dot(&self.gravity),
+            };
+        }
     }
 
     /// Inverse dynamics τ = M(q) q̈ + C(q, q̇) q̇ + g(q) at the configuration of the last

@@ -279,11 +279,13 @@ impl HybridController {
             (cmd.frame.translation.vector - state.tool.translation.vector).into(),
             cmd.frame.rotation,
         );
-        let (omega, omega_tilde) = adjoint::operators(&frame_in_control, &cmd.position, &cmd.stiffness);
+        // Every operator of the law is `Adg · diag · Ad⁻¹` or `Adg · diag · Adg⁻¹` (Ω, Ω̃, the
+        // damping, the twist selection; docs/method.md §6), so the law runs in the compliant
+        // frame: each vector goes in once (`Ad⁻¹ v`, `Adg⁻¹ w = Adᵀ w`), the diagonals act per
+        // axis, and one `Adg = Ad⁻ᵀ` brings the sum out. Eight 6-vector products instead of
+        // ten 6×6 matrix products; equal to the matrix form (`matches_the_operator_form`).
         let ad = adjoint::adjoint(&frame_in_control);
         let ad_inv = adjoint::adjoint_inverse(&frame_in_control);
-        let adg = ad_inv.transpose();
-        let adg_inv = ad.transpose();
 
         // Pose error: position difference and the rotation vector of q_d q⁻¹ (shortest way).
         let mut e_p = Vector6::zeros();
@@ -291,13 +293,18 @@ impl HybridController {
             .copy_from(&(cmd.pose.translation.vector - state.tool.translation.vector));
         e_p.fixed_rows_mut::<3>(3)
             .copy_from(&rotation_error(&cmd.pose.rotation, &state.tool.rotation));
+        let e_p_cf = ad_inv * e_p;
 
-        // Damping in the compliant frame, moved to the control frame like the stiffness.
-        let mut d_cf = Matrix6::zeros();
-        let mut s = Matrix6::zeros();
+        // Damping in the compliant frame, acting on the twist minus the commanded twist's
+        // position-controlled part (Ad S Ad⁻¹ in the control frame).
+        let twist_cf = ad_inv * state.twist;
+        let cmd_twist_cf = ad_inv * cmd.twist;
+        let mut d_cf = Vector6::zeros();
+        let mut k_s = Vector6::zeros();
         for axis in 0..6 {
             let rotation = axis >= 3;
-            d_cf[(axis, axis)] = if cmd.position[axis] {
+            d_cf[axis] = if cmd.position[axis] {
+                k_s[axis] = cmd.stiffness[axis];
                 let mass = if rotation {
                     gains.effective_inertia_kgm2
                 } else {
@@ -314,22 +321,15 @@ impl HybridController {
             } else {
                 gains.force_axis_damping
             };
-            if cmd.position[axis] {
-                s[(axis, axis)] = 1.0;
-            }
         }
-        let damping = adg * d_cf * ad_inv;
-        let twist_selected = ad * s * ad_inv * cmd.twist;
 
         // Force error, in the compliant frame too.
-        let e_f = cmd.wrench - state.applied;
-        let e_f_cf = adg_inv * e_f;
+        let desired_cf = ad.tr_mul(&cmd.wrench);
+        let e_f_cf = desired_cf - ad.tr_mul(&state.applied);
 
         // Speed limit on force-controlled translations, in the compliant frame, following the
         // force each still misses.
-        let twist_cf = ad_inv * state.twist;
         let mut brake_cf = Vector6::zeros();
-        let desired_cf = adg_inv * cmd.wrench;
         for axis in 0..3 {
             let excess = twist_cf[axis].abs() - gains.force_axis_speed_limit(e_f_cf[axis], desired_cf[axis]);
             if !cmd.position[axis] && excess > 0.0 {
@@ -357,13 +357,16 @@ impl HybridController {
                 integral_cf[axis] = value;
             }
         }
-        let integral_term = adg * (*integral_cf * cmd.ki);
 
-        omega * e_p - damping * (state.twist - twist_selected)
-            + omega_tilde * cmd.wrench
-            + omega_tilde * e_f * cmd.kp
-            + integral_term
-            + adg * brake_cf
+        let mut wrench_cf = *integral_cf * cmd.ki + brake_cf;
+        for axis in 0..6 {
+            wrench_cf[axis] += if cmd.position[axis] {
+                k_s[axis] * e_p_cf[axis] - d_cf[axis] * (twist_cf[axis] - cmd_twist_cf[axis])
+            } else {
+                desired_cf[axis] + cmd.kp * e_f_cf[axis] - d_cf[axis] * twist_cf[axis]
+            };
+        }
+        ad_inv.tr_mul(&wrench_cf)
     }
 
     /// Joint torques for this tick (after [`HybridController::observe`] on the same observation).
@@ -444,6 +447,112 @@ mod tests {
             ki: 5.0,
             integral_limit: Some(10.0),
         }
+    }
+
+    /// The law in its operator form (docs/method.md §6), term by term with 6×6 matrices: the
+    /// reference for [`HybridController::cartesian_wrench`], which runs it in the compliant frame.
+    fn operator_form(
+        gains: &ControllerGains,
+        state: &ControlState,
+        cmd: &Command,
+        integral_cf: &mut Vector6<f64>,
+        dt: f64,
+    ) -> Vector6<f64> {
+        let frame_in_control = Isometry3::from_parts(
+            (cmd.frame.translation.vector - state.tool.translation.vector).into(),
+            cmd.frame.rotation,
+        );
+        let (omega, omega_tilde) = adjoint::operators(&frame_in_control, &cmd.position, &cmd.stiffness);
+        let ad = adjoint::adjoint(&frame_in_control);
+        let ad_inv = adjoint::adjoint_inverse(&frame_in_control);
+        let (adg, adg_inv) = (ad_inv.transpose(), ad.transpose());
+        let mut e_p = Vector6::zeros();
+        e_p.fixed_rows_mut::<3>(0)
+            .copy_from(&(cmd.pose.translation.vector - state.tool.translation.vector));
+        e_p.fixed_rows_mut::<3>(3)
+            .copy_from(&rotation_error(&cmd.pose.rotation, &state.tool.rotation));
+        let (mut d_cf, mut select) = (Matrix6::zeros(), Matrix6::zeros());
+        for axis in 0..6 {
+            let rotation = axis >= 3;
+            d_cf[(axis, axis)] = match (cmd.position[axis], rotation) {
+                (true, false) => 2.0 * gains.damping_ratio * (cmd.stiffness[axis] * gains.effective_mass_kg).sqrt(),
+                (true, true) => {
+                    (2.0 * gains.damping_ratio * (cmd.stiffness[axis] * gains.effective_inertia_kgm2).sqrt())
+                        .min(gains.max_rotational_damping)
+                }
+                (false, false) => gains.force_axis_damping,
+                (false, true) => gains.force_axis_rotational_damping,
+            };
+            select[(axis, axis)] = if cmd.position[axis] { 1.0 } else { 0.0 };
+        }
+        let damping = adg * d_cf * ad_inv;
+        let twist_selected = ad * select * ad_inv * cmd.twist;
+        let e_f = cmd.wrench - state.applied;
+        let (e_f_cf, twist_cf, desired_cf) = (adg_inv * e_f, ad_inv * state.twist, adg_inv * cmd.wrench);
+        let mut brake_cf = Vector6::zeros();
+        for axis in 0..3 {
+            let excess = twist_cf[axis].abs() - gains.force_axis_speed_limit(e_f_cf[axis], desired_cf[axis]);
+            if !cmd.position[axis] && excess > 0.0 {
+                brake_cf[axis] = -gains.force_axis_brake * excess * twist_cf[axis].signum();
+            }
+        }
+        for axis in 0..6 {
+            if cmd.position[axis] {
+                integral_cf[axis] = 0.0;
+            } else if brake_cf[axis] == 0.0 {
+                let bound = cmd.integral_limit.unwrap_or(f64::INFINITY) / cmd.ki;
+                integral_cf[axis] = (integral_cf[axis] + e_f_cf[axis] * dt).clamp(-bound, bound);
+            }
+        }
+        omega * e_p - damping * (state.twist - twist_selected)
+            + omega_tilde * cmd.wrench
+            + omega_tilde * e_f * cmd.kp
+            + adg * (*integral_cf * cmd.ki)
+            + adg * brake_cf
+    }
+
+    #[test]
+    fn matches_the_operator_form() {
+        // A deterministic spread of frames, poses, twists, wrenches and selections, with the
+        // speed limit engaged on some force axes and the integral saturated on others.
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let gains = ControllerGains::default();
+        let mut braked = 0;
+        for case in 0..200 {
+            let mut vec6 = |scale: f64| Vector6::from_fn(|_, _| scale * next());
+            let (twist, cmd_twist) = (vec6(0.3), vec6(0.2));
+            let (applied, wrench) = (vec6(30.0), vec6(20.0));
+            let mut pose = |offset: f64| {
+                Isometry3::from_parts(
+                    Translation3::new(0.5 + 0.1 * next(), 0.1 * next(), offset + 0.1 * next()),
+                    UnitQuaternion::from_euler_angles(3.0 * next(), 1.5 * next(), 3.0 * next()),
+                )
+            };
+            let (tool, frame, goal) = (pose(0.3), pose(0.25), pose(0.3));
+            let position: [bool; 6] = std::array::from_fn(|axis| (case >> axis) & 1 == 1);
+            let mut cmd = command(frame, position);
+            cmd.pose = goal;
+            cmd.twist = cmd_twist;
+            cmd.wrench = wrench;
+            let state = ControlState { tool, twist, applied };
+            let start = Vector6::from_fn(|_, _| 3.0 * next());
+            let (mut fast_integral, mut reference_integral) = (start, start);
+            let fast = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut fast_integral, 0.01);
+            let reference = operator_form(&gains, &state, &cmd, &mut reference_integral, 0.01);
+            assert!(
+                (fast - reference).norm() < 1e-10 * (1.0 + reference.norm()),
+                "case {case}: {fast} against {reference}"
+            );
+            assert!((fast_integral - reference_integral).norm() < 1e-12 * (1.0 + reference_integral.norm()));
+            braked += usize::from(fast_integral.iter().zip(&start).any(|(x, y)| x == y) && position.contains(&false));
+        }
+        assert!(braked > 0, "no case held an axis at its speed limit");
     }
 
     #[test]

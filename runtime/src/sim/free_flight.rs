@@ -34,9 +34,17 @@
 //! i's unit axis and a point on it), so at most `Σᵢ |q̇ᵢ| · |p − oᵢ|`. Every joint origin lies
 //! within the chain's length `L = Σ |pos0|` of the base origin, every shape's bounding sphere
 //! within `L` plus its centre's offset `c` plus its radius `r`: `|p − oᵢ| ≤ 2L + c + r`, the
-//! `reach`, whatever the configuration and however the links turn. The step moves the joints by
+//! `reach`, whatever the configuration and however the links turn (at least 1 m/m when a joint is
+//! prismatic: it moves the points beyond it by its own displacement). The step moves the joints by
 //! `dt q̇⁺` along a straight line in joint space (semi-implicit Euler), so no point moves farther
 //! than `dt · reach · Σᵢ |q̇⁺ᵢ|`, the velocity after the step's acceleration.
+//!
+//! **Refusing without asking.** The same bound holds between any two configurations: every point
+//! lies within `reach · Σᵢ |Δqᵢ|` of where it was (along the straight line between them, whatever
+//! path the arm took), so a shape and an object found `d` apart are at most `d + reach · Σᵢ |Δqᵢ|`
+//! apart later. After a step is refused for nearness, the next ones are refused without the
+//! kinematics and distance queries for as long as that bound stays within the clearance: in
+//! contact, most steps; the decisions are the queries' own (tested).
 // `Real` is f32 or f64 depending on the rapier flavour: casts and conversions to it are identities in one.
 #![allow(clippy::unnecessary_cast, clippy::useless_conversion)]
 
@@ -50,6 +58,10 @@ use crate::robot::{Robot, RobotData};
 /// How much closer than rapier's contact prediction distance (and the step's largest motion)
 /// a shape of the arm may come to an object before rapier takes the steps again, m.
 pub(super) const CLEAR_MARGIN_M: f64 = 0.001;
+
+/// Rounding allowance of the nearness bound in [`FreeFlight::try_step`], m: a step whose bound
+/// comes within this of the clearance is queried rather than refused outright.
+const NEAR_ROUNDING_M: f64 = 1e-9;
 
 /// A rotation matrix as rapier's quaternion, directly (no iteration): for poses every step.
 fn quat_of(rot: &nalgebra::Matrix3<f64>) -> Rotation {
@@ -128,6 +140,11 @@ pub(super) struct FreeFlight {
     /// An upper bound on any collider point's distance from any joint axis, m: a point moves at
     /// most `reach · Σ|q̇ᵢ|` m/s.
     reach: f64,
+    /// The distance of the shape and object that last refused a step for nearness (m,
+    /// `−∞` when their distance could not be computed), and the joint positions it was refused
+    /// at, in `q_near`: see [`FreeFlight::try_step`].
+    near: Option<f64>,
+    q_near: Vec<f64>,
     mass: DMatrix<f64>,
     bias: Vec<f64>,
     acc: Vec<f64>,
@@ -219,10 +236,15 @@ impl FreeFlight {
         // point within that length plus its sphere's offset and radius: their sum bounds its
         // distance from any joint axis.
         let chain: f64 = robot.bodies.iter().map(|body| body.pos0.norm()).sum();
+        // A prismatic joint moves every point beyond it by its own displacement: at most 1 m/m.
+        let prismatic = robot
+            .bodies
+            .iter()
+            .any(|body| body.kind == crate::robot::JointKind::Prismatic);
         let reach = bounds
             .iter()
             .map(|bound| 2.0 * chain + bound.center.norm() + bound.radius)
-            .fold(0.0, f64::max);
+            .fold(if prismatic { 1.0 } else { 0.0 }, f64::max);
         FreeFlight {
             data: robot.data(),
             zeros: vec![0.0; n],
@@ -238,6 +260,8 @@ impl FreeFlight {
             objects,
             clearance: prediction_m + CLEAR_MARGIN_M,
             reach,
+            near: None,
+            q_near: vec![0.0; n],
             mass: DMatrix::zeros(n, n),
             bias: vec![0.0; n],
             acc: vec![0.0; n],
@@ -297,6 +321,19 @@ impl FreeFlight {
         if !inside {
             return false;
         }
+        // The pair that last refused a step for nearness was `near` apart at `q_near`; a point of
+        // the arm lies at most `reach · Σ|Δq|` from where it was at `q_near` (along the straight
+        // line between the two configurations, whatever path the arm took; objects are static),
+        // so their distance is still at most `near + reach · Σ|Δq|`. While that is within the
+        // clearance (less a nanometre for rounding), the query below would refuse the step as
+        // well: refuse it without the kinematics and the distance queries. In contact this is
+        // most steps, and the refusals are the same as querying.
+        if let Some(near) = self.near {
+            let moved: f64 = self.q.iter().zip(&self.q_near).map(|(a, b)| (a - b).abs()).sum();
+            if near + self.reach * moved + NEAR_ROUNDING_M <= self.clearance {
+                return false;
+            }
+        }
         if !self.kinematics_at_q {
             self.robot.forward_kinematics(&mut self.data, &self.q);
             self.kinematics_at_q = true;
@@ -305,8 +342,16 @@ impl FreeFlight {
         // refuses the steps near contact before any dynamics), keeping the smallest distance
         // found: checked again below against the bound from the velocity after the step.
         let start_speed: f64 = self.qd.iter().map(|v| v.abs()).sum();
-        let Some(gap) = self.gap_beyond(self.clearance + dt * self.reach * start_speed) else {
-            return false;
+        let gap = match self.gap_beyond(self.clearance + dt * self.reach * start_speed) {
+            Ok(gap) => {
+                self.near = None;
+                gap
+            }
+            Err(near) => {
+                self.near = Some(near);
+                self.q_near.copy_from_slice(&self.q);
+                return false;
+            }
         };
         // q̈ = M⁻¹ (τ − C q̇ − g − d q̇⁺), the damping implicit: (M + dt d I) q̈ = τ − C q̇ − g − d q̇.
         let (q, qd) = (&self.q, &self.qd);
@@ -345,7 +390,7 @@ impl FreeFlight {
     /// object, or a lower bound on it (a bounding sphere's distance from an object's box) where
     /// that bound exceeds `margin`; `None` when some shape lies within `margin` of an object (or
     /// parry cannot tell the distance).
-    fn gap_beyond(&self, margin: f64) -> Option<f64> {
+    fn gap_beyond(&self, margin: f64) -> Result<f64, f64> {
         let mut gap = f64::INFINITY;
         for bound in &self.bounds {
             let (rot, pos) = (&self.data.rot[bound.body], &self.data.pos[bound.body]);
@@ -367,11 +412,12 @@ impl FreeFlight {
                 );
                 match distance {
                     Ok(found) if f64::from(found.distance) > margin => gap = gap.min(f64::from(found.distance)),
-                    _ => return None,
+                    Ok(found) => return Err(f64::from(found.distance)),
+                    Err(_) => return Err(f64::NEG_INFINITY),
                 }
             }
         }
-        Some(gap)
+        Ok(gap)
     }
 }
 
@@ -515,6 +561,53 @@ mod tests {
         qd[3] = 1.0;
         load(free, &q, &qd);
         assert!(!free.try_step(&gravity(&robot, &q), 1e-3));
+    }
+
+    #[test]
+    fn a_step_the_nearness_bound_refuses_the_distance_query_refuses_too() {
+        // The probe tip 1 mm above the table: refused for nearness, which leaves the bound. From
+        // joint displacements around that configuration (log-uniform, 1e-5 to 0.1 rad a joint),
+        // a flight that remembers the refusal and one that does not take the same decision;
+        // near by, the bound refuses without querying, farther off the query decides.
+        let mut plant = table_plant(0.0);
+        let robot = plant.robot().clone();
+        let q0 = plant.observe().q.as_slice().to_vec();
+        let free = plant.free.as_mut().expect("built");
+        load(free, &q0, &[0.0; 7]);
+        assert!(!free.try_step(&gravity(&robot, &q0), 1e-3), "1 mm above the table");
+        let near = free.near.expect("refused for nearness");
+        assert!((0.0..0.0015).contains(&near), "the tip's distance {near} m");
+        let refused = free.clone();
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut by_bound, mut queried, mut flew) = (0, 0, 0);
+        for case in 0..600 {
+            let scale = 10f64.powf(-5.0 + 4.0 * uniform());
+            let q: Vec<f64> = q0.iter().map(|q| q + scale * (2.0 * uniform() - 1.0)).collect();
+            let tau = gravity(&robot, &q);
+            let mut remembering = refused.clone();
+            load(&mut remembering, &q, &[0.0; 7]);
+            let mut forgetting = remembering.clone();
+            forgetting.near = None;
+            let moved: f64 = q.iter().zip(&q0).map(|(a, b)| (a - b).abs()).sum();
+            if near + refused.reach * moved + NEAR_ROUNDING_M <= refused.clearance {
+                by_bound += 1;
+            } else {
+                queried += 1;
+            }
+            let free_step = forgetting.try_step(&tau, 1e-3);
+            assert_eq!(remembering.try_step(&tau, 1e-3), free_step, "case {case}: {q:?}");
+            flew += usize::from(free_step);
+        }
+        assert!(
+            by_bound > 50 && queried > 50 && flew > 20,
+            "{by_bound} by the bound, {queried} queried, {flew} free"
+        );
     }
 
     #[test]

@@ -178,16 +178,18 @@ impl<'a> WeightFit<'a> {
         let stride = self.stride;
         let sum: f64 = psi.iter().sum();
         let factor = s / sum;
-        let mut phi = [0.0; 2 * LANES];
+        let mut phi = [0.0; LANES];
         for (dst, value) in phi.iter_mut().zip(psi) {
             *dst = value * factor;
         }
-        // Row `a` of the upper triangle takes lanes `a..` (lanes past the last are 0).
+        // Row `a` of the upper triangle takes lanes `a..LANES`: 36 products, not 64 (what lay
+        // past the last lane added products of 0, and every product here is ≥ +0, so leaving
+        // them out changes no bit).
         for a in 0..LANES {
             let phi_a = phi[a];
             let at = (first + a) * stride + first + a;
-            let row = &mut self.gram[at..at + LANES];
-            for (g, &phi_b) in row.iter_mut().zip(&phi[a..a + LANES]) {
+            let row = &mut self.gram[at..at + LANES - a];
+            for (g, &phi_b) in row.iter_mut().zip(&phi[a..]) {
                 *g += phi_a * phi_b;
             }
         }

@@ -410,10 +410,15 @@ pub enum Temporal {
     },
     /// Only clusters within `k` samples of each other in time may merge.
     Connectivity {
-        /// Neighbourhood size in samples.
+        /// Neighbourhood size in samples, 1 to [`MAX_CONNECTIVITY`].
         k: u32,
     },
 }
+
+/// The largest connectivity clustering takes: each sample links to `k` neighbours on either side
+/// (16 bytes a link), so `k` sizes the clustering's memory (`32 k` bytes a sample) and work.
+/// ±100 samples is 0.1 s of a 1 kHz demonstration either side, ten times the default.
+pub const MAX_CONNECTIVITY: u32 = 100;
 
 /// Where to cut the cluster dendrogram.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

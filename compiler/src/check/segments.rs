@@ -93,9 +93,27 @@ impl Checker<'_> {
                         let weight = self.positive(value, weight.span, "the time weight")?;
                         ir::Temporal::TimeFeature { weight }
                     }
-                    (None, Some(k)) => ir::Temporal::Connectivity {
-                        k: self.count(k, "the connectivity")?,
-                    },
+                    (None, Some(k)) => {
+                        let value = self.count(k, "the connectivity")?;
+                        if value > ir::MAX_CONNECTIVITY {
+                            let diag = self
+                                .diag(
+                                    Code::OutOfRange,
+                                    k.span,
+                                    format!("the connectivity must be between 1 and {}", ir::MAX_CONNECTIVITY),
+                                    "too many neighbours",
+                                )
+                                .help(
+                                    "each sample links to this many neighbours on either side, which sizes the \
+                                     clustering's memory and work; 10 (the default) suits most demonstrations",
+                                );
+                            self.report(diag);
+                        }
+                        // Reported; checking goes on with the largest allowed (no cascade).
+                        ir::Temporal::Connectivity {
+                            k: value.min(ir::MAX_CONNECTIVITY),
+                        }
+                    }
                     (None, None) => ir::Temporal::Connectivity { k: 10 },
                 };
                 let min_length_s = match bound.get("min_length") {

@@ -166,10 +166,10 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
     }
     let (merges, unit_len) = match config.temporal {
         Temporal::Connectivity { k } => {
-            if k == 0 {
+            if k == 0 || k > skill_ir::MAX_CONNECTIVITY as usize {
                 return Err(SegmentError::InvalidConfig {
                     name: "k",
-                    reason: "at least one neighbour".to_owned(),
+                    reason: format!("between 1 and {} neighbours", skill_ir::MAX_CONNECTIVITY),
                 });
             }
             if n >= 1 << 31 {

@@ -128,14 +128,17 @@ fn clustering_rejects_bad_input() {
         Err(SegmentError::NonFinite { index: 1, .. })
     ));
     let features = piecewise(&PIECES, 0.2, 5);
-    let config = ClusterConfig {
-        temporal: Temporal::Connectivity { k: 0 },
-        ..ClusterConfig::default()
-    };
-    assert!(matches!(
-        cluster(&features, &config),
-        Err(SegmentError::InvalidConfig { name: "k", .. })
-    ));
+    // No neighbour, and more neighbours than the bound (a k of 4e9 would size the link arena).
+    for k in [0, skill_ir::MAX_CONNECTIVITY as usize + 1, 4_000_000_000] {
+        let config = ClusterConfig {
+            temporal: Temporal::Connectivity { k },
+            ..ClusterConfig::default()
+        };
+        assert!(matches!(
+            cluster(&features, &config),
+            Err(SegmentError::InvalidConfig { name: "k", .. })
+        ));
+    }
     let short = Features {
         data: vec![0.0; 4],
         dims: 1,

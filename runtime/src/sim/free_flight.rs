@@ -388,8 +388,8 @@ impl FreeFlight {
 
     /// The smallest distance between a shape of the arm (at the kinematics in `data`) and an
     /// object, or a lower bound on it (a bounding sphere's distance from an object's box) where
-    /// that bound exceeds `margin`; `None` when some shape lies within `margin` of an object (or
-    /// parry cannot tell the distance).
+    /// that bound exceeds `margin`; `Err` with the distance of the first shape and object found
+    /// within `margin` of each other (`−∞` when parry cannot tell their distance).
     fn gap_beyond(&self, margin: f64) -> Result<f64, f64> {
         let mut gap = f64::INFINITY;
         for bound in &self.bounds {

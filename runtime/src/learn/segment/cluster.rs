@@ -172,13 +172,20 @@ pub fn cluster(features: &Features, config: &ClusterConfig) -> Result<Vec<Segmen
                     reason: format!("between 1 and {} neighbours", skill_ir::MAX_CONNECTIVITY),
                 });
             }
-            if n >= 1 << 31 {
-                return Err(SegmentError::InvalidConfig {
-                    name: "temporal",
-                    reason: "connectivity clustering takes fewer than 2^31 samples".to_owned(),
-                });
+            // The links are addressed by u32 positions: 2k a sample to begin with, and room for
+            // the clusters that outgrow theirs.
+            let too_many = || SegmentError::InvalidConfig {
+                name: "temporal",
+                reason: format!(
+                    "connectivity clustering of {n} samples with {k} neighbours either side needs more links \
+                     than it can address; resample the demonstration to a lower rate or lower the connectivity"
+                ),
+            };
+            if n.saturating_mul(2 * k) > (u32::MAX / 4) as usize {
+                return Err(too_many());
             }
-            (connectivity_merges(&features.data, dims, k, config.linkage), 1)
+            let merges = connectivity_merges(&features.data, dims, k, config.linkage).ok_or_else(too_many)?;
+            (merges, 1)
         }
         Temporal::TimeFeature { weight, max_blocks } => {
             if !(weight.is_finite() && weight >= 0.0) {
@@ -315,14 +322,19 @@ impl Links {
     }
 
     /// Replaces cluster `x`'s links, moving them to the end of the arena when they do not fit,
-    /// and points every twin at its link's new position.
-    fn replace(&mut self, x: usize, links: &[Link]) {
+    /// and points every twin at its link's new position. `None` (nothing changed) when the
+    /// arena would outgrow the positions a `u32` addresses.
+    fn replace(&mut self, x: usize, links: &[Link]) -> Option<()> {
         let len = links.len() as u32;
         let head = &mut self.head[x];
         if len > head.cap {
-            head.cap = len.max(2 * head.cap);
+            let cap = len.max(2 * head.cap);
+            let new_len = self.arena.len() + cap as usize;
+            if new_len > u32::MAX as usize {
+                return None;
+            }
+            head.cap = cap;
             head.at = self.arena.len() as u32;
-            let new_len = self.arena.len() + head.cap as usize;
             self.arena.resize(
                 new_len,
                 Link {
@@ -338,6 +350,7 @@ impl Links {
         for (pos, link) in (at..).zip(links) {
             self.arena[link.twin as usize].twin = pos as u32;
         }
+        Some(())
     }
 
     /// Removes the link at `pos` of cluster `x` by moving its last link into the hole; returns
@@ -434,7 +447,8 @@ impl Tournament {
 
 /// The full merge sequence `(height, a, b)` of connectivity-constrained clustering, in order:
 /// at every step the connected pair with the smallest linkage distance merges (`b` into `a`).
-/// Needs fewer than 2³¹ samples (checked by [`cluster`]).
+/// Needs fewer than 2³¹ samples and `2 n k` within `u32::MAX / 4` (checked by [`cluster`]); `None` when
+/// the links outgrow the positions a `u32` addresses all the same.
 ///
 /// Every connected pair of clusters is *owned* by one of its two clusters, its first member:
 /// initially the earlier sample, afterwards the cluster that survived the most recent merge
@@ -443,7 +457,12 @@ impl Tournament {
 /// smallest owned pairs yields the smallest pair. A merge relinks the union's neighbours
 /// through the twins; only neighbours whose smallest owned pair involved `a` or `b` rescan
 /// their links, so a merge costs `O(k + log n)` for `k` neighbours in practice.
-pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: Linkage) -> Vec<(f64, usize, usize)> {
+pub(super) fn connectivity_merges(
+    data: &[f64],
+    dims: usize,
+    k: usize,
+    linkage: Linkage,
+) -> Option<Vec<(f64, usize, usize)>> {
     let n = data.len() / dims;
     assert!(n < OWNED as usize, "fewer than 2^31 samples (checked by `cluster`)");
     // Row x is cluster x's size and mean, `[size, mean...]`: a neighbour's Ward distance needs
@@ -599,11 +618,11 @@ pub(super) fn connectivity_merges(data: &[f64], dims: usize, k: usize, linkage: 
                 tournament.set(c, links.best_owned(c));
             }
         }
-        links.replace(a, &new_links);
+        links.replace(a, &new_links)?;
         tournament.set(a, links.best_owned(a));
         tournament.set(b, (f64::INFINITY, NONE));
     }
-    merges
+    Some(merges)
 }
 
 /// A neighbour `c` of a merging pair: its distance to `a` and to `b` with the position of its

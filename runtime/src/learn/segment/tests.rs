@@ -294,7 +294,7 @@ fn connectivity_merges_equal_the_heap_implementation_exactly() {
             let data = random_rows(300, 3, 100 + seed, quantised);
             for linkage in [Linkage::Ward, Linkage::Complete, Linkage::Average, Linkage::Single] {
                 for k in [1, 2, 5, 10] {
-                    let fast = super::cluster::connectivity_merges(&data, 3, k, linkage);
+                    let fast = super::cluster::connectivity_merges(&data, 3, k, linkage).expect("addressable");
                     let reference = super::reference::heap_merges(&data, 3, k, linkage);
                     assert_eq!(fast.len(), 299, "{linkage:?} k={k}: a full tree");
                     assert!(
@@ -313,7 +313,7 @@ fn connectivity_ward_equals_brute_force_on_random_data() {
     for seed in 0..3 {
         let data = random_rows(n, 2, 200 + seed, false);
         for k in [1, 3, 5] {
-            let fast = super::cluster::connectivity_merges(&data, 2, k, Linkage::Ward);
+            let fast = super::cluster::connectivity_merges(&data, 2, k, Linkage::Ward).expect("addressable");
             let brute = super::reference::brute_force_ward(&data, 2, k);
             assert_eq!(fast.len(), brute.len(), "k={k}");
             // Replay the fast merges with member lists.

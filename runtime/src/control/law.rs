@@ -274,11 +274,7 @@ impl HybridController {
         integral_cf: &mut Vector6<f64>,
         dt: f64,
     ) -> Vector6<f64> {
-        // The compliant frame relative to the control frame (tool point, base axes).
-        let frame_in_control = Isometry3::from_parts(
-            (cmd.frame.translation.vector - state.tool.translation.vector).into(),
-            cmd.frame.rotation,
-        );
+        let frame_in_control = Self::frame_in_control(state, cmd);
         // Every operator of the law is `Adg · diag · Ad⁻¹` or `Adg · diag · Adg⁻¹` (Ω, Ω̃, the
         // damping, the twist selection; docs/method.md §6), so the law runs in the compliant
         // frame: each vector goes in once (`Ad⁻¹ v`, `Adg⁻¹ w = Adᵀ w`), the diagonals act per
@@ -327,6 +323,39 @@ impl HybridController {
         let desired_cf = ad.tr_mul(&cmd.wrench);
         let e_f_cf = desired_cf - ad.tr_mul(&state.applied);
 
+        let brake_cf = Self::brake_and_integrate(gains, cmd, &twist_cf, &e_f_cf, &desired_cf, integral_cf, dt);
+
+        let mut wrench_cf = *integral_cf * cmd.ki + brake_cf;
+        for axis in 0..6 {
+            wrench_cf[axis] += if cmd.position[axis] {
+                k_s[axis] * e_p_cf[axis] - d_cf[axis] * (twist_cf[axis] - cmd_twist_cf[axis])
+            } else {
+                desired_cf[axis] + cmd.kp * e_f_cf[axis] - d_cf[axis] * twist_cf[axis]
+            };
+        }
+        ad_inv.tr_mul(&wrench_cf)
+    }
+
+    /// The compliant frame relative to the control frame (the tool point, base axes).
+    fn frame_in_control(state: &ControlState, cmd: &Command) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            (cmd.frame.translation.vector - state.tool.translation.vector).into(),
+            cmd.frame.rotation,
+        )
+    }
+
+    /// The speed limit's brake on force-controlled translations (returned) and the integral's
+    /// update, in compliant-frame coordinates: twist `twist_cf`, force error `e_f_cf`, desired
+    /// wrench `desired_cf`.
+    fn brake_and_integrate(
+        gains: &ControllerGains,
+        cmd: &Command,
+        twist_cf: &Vector6<f64>,
+        e_f_cf: &Vector6<f64>,
+        desired_cf: &Vector6<f64>,
+        integral_cf: &mut Vector6<f64>,
+        dt: f64,
+    ) -> Vector6<f64> {
         // Speed limit on force-controlled translations, in the compliant frame, following the
         // force each still misses.
         let mut brake_cf = Vector6::zeros();
@@ -357,16 +386,7 @@ impl HybridController {
                 integral_cf[axis] = value;
             }
         }
-
-        let mut wrench_cf = *integral_cf * cmd.ki + brake_cf;
-        for axis in 0..6 {
-            wrench_cf[axis] += if cmd.position[axis] {
-                k_s[axis] * e_p_cf[axis] - d_cf[axis] * (twist_cf[axis] - cmd_twist_cf[axis])
-            } else {
-                desired_cf[axis] + cmd.kp * e_f_cf[axis] - d_cf[axis] * twist_cf[axis]
-            };
-        }
-        ad_inv.tr_mul(&wrench_cf)
+        brake_cf
     }
 
     /// Joint torques for this tick (after [`HybridController::observe`] on the same observation).
@@ -450,7 +470,8 @@ mod tests {
     }
 
     /// The law in its operator form (docs/method.md §6), term by term with 6×6 matrices: the
-    /// reference for [`HybridController::cartesian_wrench`], which runs it in the compliant frame.
+    /// reference for [`HybridController::cartesian_wrench`], which runs it in the compliant frame
+    /// (the per-axis brake and integral rules are the law's own).
     fn operator_form(
         gains: &ControllerGains,
         state: &ControlState,
@@ -458,10 +479,7 @@ mod tests {
         integral_cf: &mut Vector6<f64>,
         dt: f64,
     ) -> Vector6<f64> {
-        let frame_in_control = Isometry3::from_parts(
-            (cmd.frame.translation.vector - state.tool.translation.vector).into(),
-            cmd.frame.rotation,
-        );
+        let frame_in_control = HybridController::frame_in_control(state, cmd);
         let (omega, omega_tilde) = adjoint::operators(&frame_in_control, &cmd.position, &cmd.stiffness);
         let ad = adjoint::adjoint(&frame_in_control);
         let ad_inv = adjoint::adjoint_inverse(&frame_in_control);
@@ -489,21 +507,9 @@ mod tests {
         let twist_selected = ad * select * ad_inv * cmd.twist;
         let e_f = cmd.wrench - state.applied;
         let (e_f_cf, twist_cf, desired_cf) = (adg_inv * e_f, ad_inv * state.twist, adg_inv * cmd.wrench);
-        let mut brake_cf = Vector6::zeros();
-        for axis in 0..3 {
-            let excess = twist_cf[axis].abs() - gains.force_axis_speed_limit(e_f_cf[axis], desired_cf[axis]);
-            if !cmd.position[axis] && excess > 0.0 {
-                brake_cf[axis] = -gains.force_axis_brake * excess * twist_cf[axis].signum();
-            }
-        }
-        for axis in 0..6 {
-            if cmd.position[axis] {
-                integral_cf[axis] = 0.0;
-            } else if brake_cf[axis] == 0.0 {
-                let bound = cmd.integral_limit.unwrap_or(f64::INFINITY) / cmd.ki;
-                integral_cf[axis] = (integral_cf[axis] + e_f_cf[axis] * dt).clamp(-bound, bound);
-            }
-        }
+        // The brake and the integral are per-axis rules in the compliant frame, shared.
+        let brake_cf =
+            HybridController::brake_and_integrate(gains, cmd, &twist_cf, &e_f_cf, &desired_cf, integral_cf, dt);
         omega * e_p - damping * (state.twist - twist_selected)
             + omega_tilde * cmd.wrench
             + omega_tilde * e_f * cmd.kp

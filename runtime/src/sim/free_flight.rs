@@ -483,6 +483,16 @@ mod tests {
         out
     }
 
+    /// Uniform numbers in `[0, 1)` from a xorshift generator seeded with `seed` (not 0).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// Puts the flight at `q`, `qd` as if loaded from rapier.
     fn load(free: &mut FreeFlight, q: &[f64], qd: &[f64]) {
         free.q.copy_from_slice(q);
@@ -500,13 +510,7 @@ mod tests {
         let free = plant.free.as_ref().expect("built");
         let robot = &free.robot;
         let (mut before, mut after) = (robot.data(), robot.data());
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = uniform(0x2545_f491_4f6c_dd1d);
         let mut tightest: f64 = 0.0;
         for _ in 0..2000 {
             let q: Vec<f64> = robot
@@ -578,13 +582,7 @@ mod tests {
         let near = free.near.expect("refused for nearness");
         assert!((0.0..0.0015).contains(&near), "the tip's distance {near} m");
         let refused = free.clone();
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut by_bound, mut queried, mut flew) = (0, 0, 0);
         for case in 0..600 {
             let scale = 10f64.powf(-5.0 + 4.0 * uniform());

@@ -278,8 +278,9 @@ impl HybridController {
         // Every operator of the law is `Adg · diag · Ad⁻¹` or `Adg · diag · Adg⁻¹` (Ω, Ω̃, the
         // damping, the twist selection; docs/method.md §6), so the law runs in the compliant
         // frame: each vector goes in once (`Ad⁻¹ v`, `Adg⁻¹ w = Adᵀ w`), the diagonals act per
-        // axis, and one `Adg = Ad⁻ᵀ` brings the sum out. Eight 6-vector products instead of
-        // ten 6×6 matrix products; equal to the matrix form (`matches_the_operator_form`).
+        // axis, and one `Adg = Ad⁻ᵀ` brings the sum out: six matrix-vector products instead of
+        // eight 6×6 matrix products and ten matrix-vector ones; equal to the matrix form
+        // (`matches_the_operator_form`).
         let ad = adjoint::adjoint(&frame_in_control);
         let ad_inv = adjoint::adjoint_inverse(&frame_in_control);
 

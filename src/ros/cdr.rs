@@ -202,7 +202,11 @@ impl<'a> CdrReader<'a> {
         })
     }
 
-    /// A `string`: its length (with the NUL) must fit in the bytes left; the text must be UTF-8.
+    /// A `string`: its length (with the NUL) must fit in the bytes left, its last byte must be
+    /// the terminating NUL and no other byte a NUL, and the text must be UTF-8. An empty string is
+    /// length 1 and a NUL; the length 0 some writers emit for it (malformed, no bytes follow) is
+    /// read as empty too. Neither moves the next field off its alignment: that is counted from
+    /// the header whatever the string's length.
     pub fn string(&mut self, what: &str) -> Result<String, CdrError> {
         let start = self.pos;
         let len = self.u32(&format!("{what}'s length"))? as usize;
@@ -217,11 +221,47 @@ impl<'a> CdrReader<'a> {
         }
         let bytes = &self.data[self.pos..self.pos + len];
         self.pos += len;
-        // The terminating NUL (absent from some writers' empty strings).
-        let text = bytes.strip_suffix(&[0]).unwrap_or(bytes);
+        let text = match bytes.split_last() {
+            None => &[][..],
+            Some((0, text)) => text,
+            Some(_) => {
+                return Err(CdrError {
+                    offset: start,
+                    reason: format!(
+                        "{what} (length {len}) does not end in the NUL a CDR string ends in: the message is not of this type or is corrupt"
+                    ),
+                })
+            }
+        };
+        if text.contains(&0) {
+            return Err(CdrError {
+                offset: start,
+                reason: format!(
+                    "{what} (length {len}) holds a NUL before its end: the message is not of this type or is corrupt"
+                ),
+            });
+        }
         String::from_utf8(text.to_vec()).map_err(|_| CdrError {
             offset: start,
             reason: format!("{what} is not UTF-8 text"),
+        })
+    }
+
+    /// Ends a message after its last field, `last`: every byte must have been read but for at
+    /// most 3 bytes of padding that bring the message to a multiple of 4 bytes after the header
+    /// (XCDR's end padding, which rmw may add). Anything more means the bytes are another type,
+    /// or the decoder misread a length.
+    pub fn finish(self, last: &str) -> Result<(), CdrError> {
+        let left = self.remaining();
+        let body = self.data.len().saturating_sub(CDR_LE.len());
+        if left == 0 || (left < 4 && body.is_multiple_of(4)) {
+            return Ok(());
+        }
+        Err(CdrError {
+            offset: self.pos,
+            reason: format!(
+                "{left} byte(s) are left over after the last field (`{last}`): the message is longer than this type (is it another type?)"
+            ),
         })
     }
 
@@ -291,6 +331,89 @@ mod tests {
         assert!(err.reason.contains("element"), "{err}");
         assert!(CdrReader::new(&[0, 1]).is_err());
         assert!(CdrReader::new(&[0, 7, 0, 0]).is_err());
+    }
+
+    /// An `i32`, a string written as `string_bytes` (length field and bytes), then an `f64`.
+    fn int_string_double(string_bytes: &[u8]) -> Vec<u8> {
+        let mut bytes = CDR_LE.to_vec();
+        bytes.extend_from_slice(&7i32.to_le_bytes());
+        bytes.extend_from_slice(string_bytes);
+        while !(bytes.len() - 4).is_multiple_of(8) {
+            bytes.push(0);
+        }
+        bytes.extend_from_slice(&2.5f64.to_le_bytes());
+        bytes
+    }
+
+    #[test]
+    fn empty_strings_of_length_one_and_zero_keep_the_next_field_aligned() {
+        let mut writer = CdrWriter::new();
+        writer.i32(7);
+        writer.string("");
+        writer.f64(2.5);
+        let written = writer.finish();
+        assert_eq!(written, int_string_double(&[1, 0, 0, 0, 0]), "ROS 2's empty string");
+        // Length 1 and a NUL, as rmw writes it; length 0 and nothing, as some writers do.
+        for bytes in [written, int_string_double(&[0, 0, 0, 0])] {
+            let mut reader = CdrReader::new(&bytes).expect("header");
+            assert_eq!(reader.i32("a").expect("i32"), 7);
+            assert_eq!(reader.string("frame_id").expect("string"), "");
+            assert_eq!(reader.f64("x").expect("f64"), 2.5, "{bytes:?}");
+            reader.finish("x").expect("nothing left");
+        }
+    }
+
+    #[test]
+    fn strings_must_end_in_their_nul_and_hold_no_other() {
+        let bytes = int_string_double(&[3, 0, 0, 0, b'a', b'b', b'c']);
+        let err = CdrReader::new(&bytes)
+            .and_then(|mut reader| {
+                reader.i32("a")?;
+                reader.string("frame_id")
+            })
+            .expect_err("no NUL");
+        assert!(
+            err.reason.contains("frame_id (length 3) does not end in the NUL"),
+            "{err}"
+        );
+        let bytes = int_string_double(&[3, 0, 0, 0, b'a', 0, 0]);
+        let err = CdrReader::new(&bytes)
+            .and_then(|mut reader| {
+                reader.i32("a")?;
+                reader.string("frame_id")
+            })
+            .expect_err("inner NUL");
+        assert!(err.reason.contains("holds a NUL before its end"), "{err}");
+    }
+
+    #[test]
+    fn a_message_must_be_read_to_its_end_but_for_end_padding() {
+        let mut writer = CdrWriter::new();
+        writer.string("ab");
+        let exact = writer.finish();
+        assert_eq!(exact.len(), 4 + 4 + 3);
+        let read = |bytes: &[u8]| {
+            let mut reader = CdrReader::new(bytes)?;
+            reader.string("data")?;
+            reader.finish("data")
+        };
+        read(&exact).expect("exact");
+        // One byte of padding brings the body to 8 bytes: allowed.
+        let mut padded = exact.clone();
+        padded.push(0);
+        read(&padded).expect("end padding");
+        // Two more bytes pass the 4-byte boundary; four bytes are never padding.
+        padded.extend_from_slice(&[0, 0]);
+        let err = read(&padded).expect_err("leftover");
+        assert_eq!(err.offset, 11);
+        assert!(
+            err.reason
+                .starts_with("3 byte(s) are left over after the last field (`data`)"),
+            "{err}"
+        );
+        let mut long = exact;
+        long.extend_from_slice(&[0; 5]);
+        assert!(read(&long).is_err());
     }
 
     #[test]

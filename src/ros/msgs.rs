@@ -241,7 +241,7 @@ impl PoseStamped {
     /// Reads the CDR bytes.
     pub fn decode(data: &[u8]) -> Result<PoseStamped, CdrError> {
         let mut reader = CdrReader::new(data)?;
-        Ok(PoseStamped {
+        let pose = PoseStamped {
             header: read_header(&mut reader)?,
             position: read_f64s(&mut reader, ["pose.position.x", "pose.position.y", "pose.position.z"])?,
             orientation_xyzw: read_f64s(
@@ -253,7 +253,9 @@ impl PoseStamped {
                     "pose.orientation.w",
                 ],
             )?,
-        })
+        };
+        reader.finish("pose.orientation.w")?;
+        Ok(pose)
     }
 }
 
@@ -270,11 +272,13 @@ impl WrenchStamped {
     /// Reads the CDR bytes.
     pub fn decode(data: &[u8]) -> Result<WrenchStamped, CdrError> {
         let mut reader = CdrReader::new(data)?;
-        Ok(WrenchStamped {
+        let wrench = WrenchStamped {
             header: read_header(&mut reader)?,
             force: read_f64s(&mut reader, ["wrench.force.x", "wrench.force.y", "wrench.force.z"])?,
             torque: read_f64s(&mut reader, ["wrench.torque.x", "wrench.torque.y", "wrench.torque.z"])?,
-        })
+        };
+        reader.finish("wrench.torque.z")?;
+        Ok(wrench)
     }
 }
 
@@ -324,6 +328,11 @@ pub fn decode_tf(data: &[u8]) -> Result<Vec<TransformStamped>, CdrError> {
             )?,
         });
     }
+    reader.finish(if count == 0 {
+        "transforms' length"
+    } else {
+        "transform.rotation.w"
+    })?;
     Ok(out)
 }
 
@@ -342,13 +351,15 @@ impl JointState {
     /// Reads the CDR bytes.
     pub fn decode(data: &[u8]) -> Result<JointState, CdrError> {
         let mut reader = CdrReader::new(data)?;
-        Ok(JointState {
+        let joints = JointState {
             header: read_header(&mut reader)?,
             name: reader.string_seq("name")?,
             position: reader.f64_seq("position")?,
             velocity: reader.f64_seq("velocity")?,
             effort: reader.f64_seq("effort")?,
-        })
+        };
+        reader.finish("effort")?;
+        Ok(joints)
     }
 }
 
@@ -361,7 +372,10 @@ pub fn encode_string(text: &str) -> Vec<u8> {
 
 /// Reads a `std_msgs/String`.
 pub fn decode_string(data: &[u8]) -> Result<String, CdrError> {
-    CdrReader::new(data)?.string("data")
+    let mut reader = CdrReader::new(data)?;
+    let text = reader.string("data")?;
+    reader.finish("data")?;
+    Ok(text)
 }
 
 #[cfg(test)]
@@ -403,6 +417,61 @@ mod tests {
         }];
         assert_eq!(decode_tf(&encode_tf(&tf)), Ok(tf));
         assert_eq!(decode_string(&encode_string("press")), Ok("press".to_owned()));
+    }
+
+    #[test]
+    fn one_type_read_as_another_is_an_error() {
+        let pose = PoseStamped {
+            header: Header {
+                stamp: Time::from_seconds(1.0),
+                frame_id: "base".into(),
+            },
+            position: [0.5, 0.0, 0.3],
+            orientation_xyzw: [0.0, 1.0, 0.0, 0.0],
+        };
+        let err = WrenchStamped::decode(&pose.encode()).expect_err("a pose is not a wrench");
+        assert!(
+            err.reason
+                .starts_with("8 byte(s) are left over after the last field (`wrench.torque.z`)"),
+            "{err}"
+        );
+        let wrench = WrenchStamped {
+            header: pose.header.clone(),
+            ..WrenchStamped::default()
+        };
+        let err = PoseStamped::decode(&wrench.encode()).expect_err("a wrench is not a pose");
+        assert!(err.reason.contains("pose.orientation.w"), "{err}");
+        assert!(decode_tf(&pose.encode()).is_err());
+        assert!(JointState::decode(&pose.encode()).is_err());
+        assert!(decode_string(&pose.encode()).is_err());
+    }
+
+    #[test]
+    fn empty_frame_ids_of_length_zero_are_read_without_misaligning() {
+        let transform = TransformStamped {
+            translation: [1.0, 2.0, 3.0],
+            rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
+            ..TransformStamped::default()
+        };
+        let written = encode_tf(std::slice::from_ref(&transform));
+        assert_eq!(decode_tf(&written), Ok(vec![transform.clone()]));
+        // The same transform with both empty strings as length 0 and no bytes: the count and the
+        // stamp's seconds as written, then nanoseconds, the two lengths and padding to 24 bytes
+        // after the header (all zero), seven doubles.
+        let mut zero = written[..12].to_vec();
+        zero.extend_from_slice(&[0; 16]);
+        for value in [1.0f64, 2.0, 3.0, 0.0, 0.0, 0.0, 1.0] {
+            zero.extend_from_slice(&value.to_le_bytes());
+        }
+        assert_eq!(decode_tf(&zero), Ok(vec![transform]));
+        let wrench = WrenchStamped {
+            force: [1.0, 2.0, 3.0],
+            ..WrenchStamped::default()
+        };
+        let mut zero = wrench.encode();
+        // Length 0 for the empty frame_id's length 1; its NUL (byte 16) is then padding.
+        zero[12] = 0;
+        assert_eq!(WrenchStamped::decode(&zero), Ok(wrench));
     }
 
     #[test]

@@ -13,6 +13,19 @@
 //!   redirection would; a device cannot be replaced by a rename and is not a file to keep;
 //! - anything else (a directory, a FIFO, a socket, a block device): refused with a message.
 //!   A FIFO with no reader would block forever, and a block device is a disk.
+//!
+//! Every file a command reads is an input, also those it finds itself (imports, a task step's
+//! demonstration and learned file, the scene's URDF, a trials file's entries): the loaders call
+//! [`note_input`], and [`write()`] refuses to replace a noted input, so no output ever replaces
+//! what the command read, whatever path or link it is named by (device and inode compared).
+//! Commands also check their outputs against the noted inputs before any long work
+//! ([`refuse_inputs`]), so the refusal comes first, not after a run.
+//!
+//! A folder of outputs (the eval's report) is written as a unit by [`write_dir`]: into a hidden
+//! temporary folder beside the target, then moved into place, so a reader sees the previous
+//! report or the new one, never a mix. Every temporary file and folder is registered while it
+//! exists; [`install_signal_cleanup`] removes them on SIGINT, SIGTERM or SIGHUP before the
+//! process exits with 128 + the signal's number (130, 143, 129), so none outlives the process.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -20,8 +33,191 @@ use std::path::{Path, PathBuf};
 /// Symlinks followed before giving up (the kernel's own limit is 40).
 const MAX_LINKS: usize = 40;
 
-/// Writes `contents` to `path` as the module docs describe.
+/// One file the process has read: how it was named, and its identity.
+struct Input {
+    path: PathBuf,
+    id: FileId,
+}
+
+/// A file's identity: device and inode on Unix, the canonical path elsewhere.
+#[derive(PartialEq, Eq)]
+enum FileId {
+    #[cfg(unix)]
+    Inode { dev: u64, ino: u64 },
+    #[cfg(not(unix))]
+    Path(PathBuf),
+}
+
+impl FileId {
+    fn of(path: &Path, meta: &std::fs::Metadata) -> Option<FileId> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            let _ = path;
+            Some(FileId::Inode {
+                dev: meta.dev(),
+                ino: meta.ino(),
+            })
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = meta;
+            std::fs::canonicalize(path).ok().map(FileId::Path)
+        }
+    }
+}
+
+/// A temporary this process has made and not yet moved into place or removed.
+enum Temporary {
+    File(PathBuf),
+    Dir(PathBuf),
+    /// A previous report moved aside while its replacement is moved in: on a signal, put back
+    /// where it was when nothing took its place, else removed.
+    Aside {
+        aside: PathBuf,
+        home: PathBuf,
+    },
+}
+
+/// The temporaries, with a number each so their owner can drop them.
+static TEMPORARIES: std::sync::Mutex<Vec<(u64, Temporary)>> = std::sync::Mutex::new(Vec::new());
+
+/// The next temporary's number.
+static NEXT_TEMPORARY: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+fn temporaries() -> std::sync::MutexGuard<'static, Vec<(u64, Temporary)>> {
+    TEMPORARIES.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Registers a temporary; returns its number for [`forget_temporary`].
+fn register(temporary: Temporary) -> u64 {
+    let id = NEXT_TEMPORARY.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    temporaries().push((id, temporary));
+    id
+}
+
+/// Drops temporary `id` from the registry: it has been moved into place or removed.
+fn forget_temporary(id: u64) {
+    temporaries().retain(|(other, _)| *other != id);
+}
+
+/// Removes every registered temporary (puts a report moved aside back where nothing replaced
+/// it). Called on a signal; also safe to call at any time, it leaves the registry empty.
+pub fn remove_temporaries() {
+    remove_temporaries_where(|_| true);
+}
+
+/// [`remove_temporaries`] for those whose path `pick` picks.
+fn remove_temporaries_where(pick: impl Fn(&Path) -> bool) {
+    let mut list = temporaries();
+    let (picked, kept): (Vec<_>, Vec<_>) = list.drain(..).partition(|(_, temporary)| match temporary {
+        Temporary::File(path) | Temporary::Dir(path) | Temporary::Aside { aside: path, .. } => pick(path),
+    });
+    *list = kept;
+    for (_, temporary) in picked {
+        match temporary {
+            Temporary::File(path) => {
+                let _ = std::fs::remove_file(path);
+            }
+            Temporary::Dir(path) => {
+                let _ = std::fs::remove_dir_all(path);
+            }
+            Temporary::Aside { aside, home } => {
+                if std::fs::symlink_metadata(&home).is_err() {
+                    let _ = std::fs::rename(&aside, &home);
+                } else {
+                    let _ = std::fs::remove_dir_all(&aside);
+                }
+            }
+        }
+    }
+}
+
+/// Starts a thread that, on SIGINT, SIGTERM or SIGHUP, removes the temporaries
+/// ([`remove_temporaries`]) and exits with 128 + the signal's number. The binary calls it
+/// first; a library user who wants the same cleanup calls it too.
+#[cfg(unix)]
+pub fn install_signal_cleanup() -> std::io::Result<()> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    std::thread::Builder::new().name("signals".into()).spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            remove_temporaries();
+            // The registry's lock is held from here on, so no temporary is made after
+            // the cleanup.
+            let _held = temporaries();
+            std::process::exit(128 + signal);
+        }
+    })?;
+    Ok(())
+}
+
+/// No signals to handle off Unix; temporaries are removed as their writes end.
+#[cfg(not(unix))]
+pub fn install_signal_cleanup() -> std::io::Result<()> {
+    Ok(())
+}
+
+/// The inputs this process has read, in the order first read.
+static INPUTS: std::sync::Mutex<Vec<Input>> = std::sync::Mutex::new(Vec::new());
+
+/// Notes that the process reads `path` (through links), so no output of it replaces that file.
+/// A path that does not exist (yet) or is a device notes nothing.
+pub fn note_input(path: &Path) {
+    let Ok(meta) = std::fs::metadata(path) else {
+        return;
+    };
+    if !meta.is_file() {
+        return;
+    }
+    let Some(id) = FileId::of(path, &meta) else {
+        return;
+    };
+    let mut inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !inputs.iter().any(|input| input.id == id) {
+        inputs.push(Input {
+            path: path.to_path_buf(),
+            id,
+        });
+    }
+}
+
+/// The noted input that `path` (through links) is, as it was named when read.
+fn noted_input(path: &Path) -> Option<PathBuf> {
+    let meta = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;
+    let id = FileId::of(path, &meta)?;
+    let inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    inputs
+        .iter()
+        .find(|input| input.id == id)
+        .map(|input| input.path.clone())
+}
+
+/// The first noted input that lies inside the folder `dir`, as it was named when read.
+fn noted_inside(dir: &Path) -> Option<PathBuf> {
+    let dir = std::fs::canonicalize(dir).ok()?;
+    let inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    inputs
+        .iter()
+        .find(|input| std::fs::canonicalize(&input.path).is_ok_and(|path| path.starts_with(&dir)))
+        .map(|input| input.path.clone())
+}
+
+/// Writes `contents` to `path` as the module docs describe; a file the process has read
+/// ([`note_input`]) is refused.
 pub fn write(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    if let Some(input) = noted_input(path) {
+        return Err(std::io::Error::other(format!(
+            "it is also an input of this command (`{}`): refusing to overwrite it; choose another output",
+            input.display()
+        )));
+    }
+    write_over_input(path, contents)
+}
+
+/// [`write()`] without the input check: for a command whose output is its input by request
+/// (`skillc fmt --write` formats files in place).
+pub fn write_over_input(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     let target = resolve_links(path)?;
     match std::fs::metadata(&target) {
         Ok(meta) if meta.is_file() => replace(&target, contents, Some(meta.permissions())),
@@ -64,7 +260,8 @@ pub fn resolve_links(path: &Path) -> std::io::Result<PathBuf> {
 
 /// Refuses an output that is one of the inputs (the same file, through any path or link), so a
 /// command never overwrites what it reads: `skillc compile x.skill -o x.skill`,
-/// `skillc learn s.skill demo.csv -o demo.csv`. Outputs that do not exist yet are fine.
+/// `skillc learn s.skill demo.csv -o demo.csv`. `inputs` are checked together with every input
+/// noted so far ([`note_input`]). Outputs that do not exist yet are fine.
 ///
 /// `flag` names the output in the message (e.g. `-o`). For callers outside this crate's
 /// commands: `atomic::refuse_inputs(out, "-o", &[&args.file, &args.scene])?` before any work.
@@ -76,7 +273,8 @@ pub fn refuse_inputs(output: &Path, flag: &str, inputs: &[&Path]) -> Result<(), 
         // `/dev/null` or `/dev/stdout` as both input and output is not a file being destroyed.
         return Ok(());
     }
-    for input in inputs {
+    let noted = noted_input(output);
+    for input in inputs.iter().copied().chain(noted.as_deref()) {
         if same_file(output, &out_meta, input) {
             return Err(format!(
                 "{flag} `{}` is also an input (`{}`): refusing to overwrite it; choose another output",
@@ -129,7 +327,8 @@ fn replace(target: &Path, contents: &[u8], permissions: Option<std::fs::Permissi
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".to_string());
-    let tmp = dir.join(format!(".{file_name}.tmp-{}", std::process::id()));
+    let tmp = dir.join(temporary_name(&file_name));
+    let id = register(Temporary::File(tmp.clone()));
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
         file.write_all(contents)?;
@@ -137,12 +336,115 @@ fn replace(target: &Path, contents: &[u8], permissions: Option<std::fs::Permissi
         if let Some(permissions) = permissions {
             std::fs::set_permissions(&tmp, permissions)?;
         }
+        let _held = temporaries();
         std::fs::rename(&tmp, target)
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    forget_temporary(id);
     result
+}
+
+/// A hidden name beside `name` that no other process or write of this one uses.
+fn temporary_name(name: &str) -> String {
+    let n = NEXT_TEMPORARY.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    format!(".{name}.tmp-{}-{n}", std::process::id())
+}
+
+/// What a folder [`write_dir`] may replace holds only these entries: the files a report of
+/// skillc's writes. A folder with anything else is the user's, and is refused, not replaced.
+const REPORT_ENTRIES: &[&str] = &["summary.json", "index.html", "plots"];
+
+/// Writes a folder of outputs as a unit: `fill` writes into a fresh hidden folder beside `dir`,
+/// which then takes `dir`'s place (the module docs). An existing `dir` is replaced only when it
+/// is empty or holds nothing but what a report holds ([`REPORT_ENTRIES`]); otherwise the write
+/// is refused before `fill` runs. On any error the new folder is removed and `dir` is as it was.
+pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) -> std::io::Result<T> {
+    let dir = resolve_links(dir)?;
+    let existing = match std::fs::metadata(&dir) {
+        Ok(meta) if meta.is_dir() => {
+            let foreign: Vec<String> = std::fs::read_dir(&dir)?
+                .filter_map(Result::ok)
+                .map(|entry| entry.file_name().to_string_lossy().into_owned())
+                .filter(|name| !REPORT_ENTRIES.contains(&name.as_str()))
+                .collect();
+            if let Some(input) = noted_inside(&dir) {
+                return Err(std::io::Error::other(format!(
+                    "it holds `{}`, an input of this command: refusing to replace it; choose another folder",
+                    input.display()
+                )));
+            }
+            if let Some(name) = foreign.first() {
+                return Err(std::io::Error::other(format!(
+                    "it is a folder that holds `{name}`{}, which a skillc report does not: refusing to replace it; choose a new or empty folder",
+                    if foreign.len() > 1 { format!(" and {} more", foreign.len() - 1) } else { String::new() }
+                )));
+            }
+            true
+        }
+        Ok(_) => return Err(std::io::Error::other("it exists and is not a folder")),
+        Err(err) if err.kind() == std::io::ErrorKind::NotFound => false,
+        Err(err) => return Err(err),
+    };
+    let parent = match dir.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".to_string());
+    std::fs::create_dir_all(&parent)?;
+    let tmp = parent.join(temporary_name(&name));
+    let tmp_id = register(Temporary::Dir(tmp.clone()));
+    let filled = std::fs::create_dir(&tmp).and_then(|()| fill(&tmp));
+    let value = match filled {
+        Ok(value) => value,
+        Err(err) => {
+            let _ = std::fs::remove_dir_all(&tmp);
+            forget_temporary(tmp_id);
+            return Err(err);
+        }
+    };
+    let moved = if existing {
+        let aside = parent.join(format!(".{name}.old-{}", std::process::id()));
+        let mut list = temporaries();
+        let moved = std::fs::rename(&dir, &aside).and_then(|()| {
+            std::fs::rename(&tmp, &dir).inspect_err(|_| {
+                let _ = std::fs::rename(&aside, &dir);
+            })
+        });
+        list.retain(|(other, _)| *other != tmp_id);
+        let aside_id = NEXT_TEMPORARY.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if moved.is_ok() {
+            list.push((
+                aside_id,
+                Temporary::Aside {
+                    aside: aside.clone(),
+                    home: dir.clone(),
+                },
+            ));
+        }
+        drop(list);
+        if moved.is_ok() {
+            let _ = std::fs::remove_dir_all(&aside);
+            forget_temporary(aside_id);
+        }
+        moved
+    } else {
+        let held = temporaries();
+        let moved = std::fs::rename(&tmp, &dir);
+        drop(held);
+        forget_temporary(tmp_id);
+        moved
+    };
+    if let Err(err) = moved {
+        let _ = std::fs::remove_dir_all(&tmp);
+        forget_temporary(tmp_id);
+        return Err(err);
+    }
+    Ok(value)
 }
 
 #[cfg(test)]
@@ -239,5 +541,108 @@ mod tests {
             "another spelling"
         );
         std::fs::remove_dir_all(&dir).expect("clean up");
+    }
+
+    fn entries(dir: &std::path::Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .expect("list")
+            .filter_map(Result::ok)
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn a_folder_is_written_as_a_unit_and_replaces_only_a_report() {
+        let root = temp_dir("write-dir");
+        let report = root.join("report");
+        super::write_dir(&report, |dir| {
+            std::fs::create_dir(dir.join("plots"))?;
+            std::fs::write(dir.join("summary.json"), "one")
+        })
+        .expect("new folder");
+        assert_eq!(entries(&root), ["report"], "no temporary beside it");
+        super::write_dir(&report, |dir| std::fs::write(dir.join("index.html"), "two")).expect("replaces a report");
+        assert_eq!(entries(&report), ["index.html"], "the old report's files are gone");
+        assert_eq!(entries(&root), ["report"]);
+        // A failing fill leaves the previous report as it was and no temporary.
+        let err = super::write_dir(&report, |dir| {
+            std::fs::write(dir.join("summary.json"), "half")?;
+            Err::<(), _>(std::io::Error::other("disk full"))
+        })
+        .expect_err("fill failed");
+        assert_eq!(err.to_string(), "disk full");
+        assert_eq!(entries(&report), ["index.html"]);
+        assert_eq!(entries(&root), ["report"]);
+        // A folder with the user's own files is refused before anything is written.
+        let mine = root.join("mine");
+        std::fs::create_dir(&mine).expect("mine");
+        std::fs::write(mine.join("thesis.tex"), "precious").expect("file");
+        let err = super::write_dir(&mine, |_| Ok(())).expect_err("not a report");
+        assert!(err.to_string().contains("thesis.tex"), "{err}");
+        assert_eq!(entries(&mine), ["thesis.tex"]);
+        std::fs::remove_dir_all(&root).expect("clean up");
+    }
+
+    #[test]
+    fn a_folder_holding_an_input_is_not_replaced() {
+        let root = temp_dir("dir-input");
+        let report = root.join("report");
+        std::fs::create_dir(&report).expect("report");
+        let summary = report.join("summary.json");
+        std::fs::write(&summary, "{}").expect("summary");
+        super::note_input(&summary);
+        let err = super::write_dir(&report, |_| Ok(())).expect_err("holds an input");
+        assert!(err.to_string().contains("summary.json"), "{err}");
+        assert_eq!(std::fs::read_to_string(&summary).expect("kept"), "{}");
+        std::fs::remove_dir_all(&root).expect("clean up");
+    }
+
+    #[test]
+    fn a_noted_input_is_never_written_over() {
+        let root = temp_dir("noted");
+        let demo = root.join("demo.csv");
+        std::fs::write(&demo, "t,px").expect("demo");
+        #[cfg(unix)]
+        std::os::unix::fs::symlink("demo.csv", root.join("alias.csv")).expect("link");
+        super::note_input(&root.join("./demo.csv"));
+        let err = super::write(&demo, b"log").expect_err("an input");
+        assert!(err.to_string().contains("also an input"), "{err}");
+        #[cfg(unix)]
+        {
+            let err = super::write(&root.join("alias.csv"), b"log").expect_err("the same file by a link");
+            assert!(err.to_string().contains("demo.csv"), "{err}");
+            let err = super::refuse_inputs(&root.join("alias.csv"), "-o", &[]).expect_err("noted");
+            assert!(err.starts_with("-o `"), "{err}");
+        }
+        assert_eq!(std::fs::read_to_string(&demo).expect("kept"), "t,px");
+        // In place on request.
+        super::write_over_input(&demo, b"formatted").expect("in place");
+        assert_eq!(std::fs::read_to_string(&demo).expect("written"), "formatted");
+        std::fs::remove_dir_all(&root).expect("clean up");
+    }
+
+    #[test]
+    fn a_signal_mid_write_leaves_the_previous_folder_and_no_temporary() {
+        let root = temp_dir("signal");
+        let report = root.join("report");
+        super::write_dir(&report, |dir| std::fs::write(dir.join("summary.json"), "old")).expect("first");
+        // What the signal handler does, while the new report is half written.
+        let err = super::write_dir(&report, |dir| {
+            std::fs::write(dir.join("summary.json"), "new")?;
+            // Only this test's: the other tests of this process write files meanwhile.
+            let root = root.clone();
+            super::remove_temporaries_where(move |path| path.starts_with(&root));
+            Ok(())
+        })
+        .expect_err("its temporary is gone");
+        let _ = err;
+        assert_eq!(entries(&root), ["report"], "no temporary left");
+        assert_eq!(
+            std::fs::read_to_string(report.join("summary.json")).expect("old"),
+            "old"
+        );
+        std::fs::remove_dir_all(&root).expect("clean up");
     }
 }

@@ -29,7 +29,9 @@ pub fn compile_path_with(path: &Path, params: &[String]) -> Result<Compilation, 
         path: name.clone(),
         source,
     })?;
+    crate::atomic::note_input(path);
     let mut load = |import: &str| -> Result<String, LoadError> {
+        crate::atomic::note_input(Path::new(import));
         let bytes = std::fs::read(import).map_err(|err| LoadError {
             reason: err.to_string().to_lowercase(),
         })?;

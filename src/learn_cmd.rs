@@ -209,6 +209,8 @@ fn learn(args: &LearnArgs) -> Result<(String, Vec<String>), Failure> {
     atomic::refuse_inputs(&args.output, "-o", &[&args.skill_file, &args.demo]).map_err(Failure::Usage)?;
     refuse_other_kinds_flags(args)?;
     let (_, skill) = load_skill(&args.skill_file, args.skill.as_deref())?;
+    // The skill's imports are inputs too.
+    atomic::refuse_inputs(&args.output, "-o", &[]).map_err(Failure::Usage)?;
     let options = LearnOptions {
         lowpass_hz: args.lowpass,
         resample_hz: args.resample,

@@ -159,6 +159,7 @@ pub fn read_demo(
     dialect: &Dialect,
     bag: &BagOptions,
 ) -> Result<(Loaded, Vec<String>, Option<String>), Failure> {
+    crate::atomic::note_input(path);
     if crate::ros::is_mcap(path) {
         return read_bag(path, bag);
     }
@@ -334,6 +335,7 @@ pub fn read_learned(path: &Path) -> Result<Learned, Failure> {
         )));
     }
     let text = std::fs::read_to_string(path).map_err(cannot_read)?;
+    crate::atomic::note_input(path);
     let not_learned = |err: serde_json::Error| {
         Failure::Input(format!(
             "`{file}` is not a learned file: {err} (line {}, column {})",
@@ -371,6 +373,7 @@ pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
         SceneError::Io { .. } => Failure::Usage(error_chain(&err)),
         _ => Failure::Input(error_chain(&err)),
     })?;
+    crate::atomic::note_input(path);
     for set in sets {
         let Some((key, value)) = set.split_once('=') else {
             return Err(Failure::Usage(format!(
@@ -381,5 +384,7 @@ pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
             .set(key.trim(), value.trim())
             .map_err(|err| Failure::Input(error_chain(&err)))?;
     }
+    // The plant reads the scene's robot: it is an input too.
+    crate::atomic::note_input(&scene.urdf_path());
     Ok(scene)
 }

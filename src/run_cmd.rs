@@ -184,6 +184,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         }
     };
     let scene = load_scene(&args.scene, &args.sets)?;
+    refuse_noted_output(args)?;
     let options = ExecOptions {
         overrides: skill_ir::Overrides {
             force_scale: args.force_scale,
@@ -372,6 +373,14 @@ fn summary_under(heading: &str, report: &RunReport, log: &RunLog) -> String {
     out
 }
 
+/// Refuses `-o` when it is a file read so far (imports, the scene's robot, ...), before the run.
+fn refuse_noted_output(args: &RunArgs) -> Result<(), Failure> {
+    match &args.output {
+        Some(out) => atomic::refuse_inputs(out, "-o", &[]).map_err(Failure::Usage),
+        None => Ok(()),
+    }
+}
+
 /// Learns (or reads) what a task step needs.
 fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(skill_ir::Skill, Learned), Failure> {
     let skill = step
@@ -410,6 +419,14 @@ fn run_task(
     task: &skill_ir::Task,
 ) -> Result<(RunReport, String), Failure> {
     let scene = load_scene(&args.scene, &args.sets)?;
+    // The steps' demonstrations and learned files are inputs too: refuse an output that is one
+    // of them before learning anything.
+    for step in task.steps.iter().chain(&task.fallbacks) {
+        match &step.input {
+            skill_ir::StepInput::Demo(path) | skill_ir::StepInput::Learned(path) => atomic::note_input(Path::new(path)),
+        }
+    }
+    refuse_noted_output(args)?;
     let prepared: Vec<(skill_ir::Skill, Learned)> = task
         .steps
         .iter()

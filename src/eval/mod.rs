@@ -423,6 +423,7 @@ fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
+            crate::atomic::note_input(path);
             let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
             (text, path.display().to_string(), base)
         }

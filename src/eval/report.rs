@@ -121,7 +121,9 @@ fn escape(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// Writes `summary.json`, the plots and `index.html` into `out`; returns the HTML's path.
+/// Writes `summary.json`, the plots and `index.html` into the folder `out` as a unit
+/// ([`atomic::write_dir`]: an interrupted eval leaves the previous report or none); returns the
+/// HTML's path.
 pub(super) fn write(
     out: &Path,
     skills: &[SkillView<'_>],
@@ -131,6 +133,20 @@ pub(super) fn write(
     table: &str,
     real: &[RealResult],
 ) -> std::io::Result<PathBuf> {
+    atomic::write_dir(out, |dir| fill(dir, skills, tasks, outcomes, elapsed_s, table, real))?;
+    Ok(out.join("index.html"))
+}
+
+/// [`write`]'s files, written into `out`.
+fn fill(
+    out: &Path,
+    skills: &[SkillView<'_>],
+    tasks: &[TaskView<'_>],
+    outcomes: &[Outcome],
+    elapsed_s: f64,
+    table: &str,
+    real: &[RealResult],
+) -> std::io::Result<()> {
     std::fs::create_dir_all(out.join("plots"))?;
     let summary = serde_json::json!({
         "format_version": super::SUMMARY_VERSION,
@@ -317,9 +333,7 @@ pub(super) fn write(
         "<h2>Terminal table</h2>\n<pre>{}</pre>\n</body></html>",
         escape(table)
     );
-    let index = out.join("index.html");
-    atomic::write(&index, html.as_bytes())?;
-    Ok(index)
+    atomic::write(&out.join("index.html"), html.as_bytes())
 }
 
 /// The real-demonstration results as text.

@@ -386,8 +386,15 @@ pub fn rates(trials: &[TrialResult]) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// Writes `summary.json`, `plots/sweep.svg` and `index.html` into `out`; returns the HTML's path.
+/// Writes `summary.json`, `plots/sweep.svg` and `index.html` into the folder `out` as a unit
+/// ([`atomic::write_dir`]); returns the HTML's path.
 pub fn write(out: &Path, summary: &SweepSummary, text: &str) -> std::io::Result<PathBuf> {
+    atomic::write_dir(out, |dir| fill(dir, summary, text))?;
+    Ok(out.join("index.html"))
+}
+
+/// [`write`]'s files, written into `out`.
+fn fill(out: &Path, summary: &SweepSummary, text: &str) -> std::io::Result<()> {
     std::fs::create_dir_all(out.join("plots"))?;
     let json = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)? + "\n";
     atomic::write(&out.join("summary.json"), json.as_bytes())?;
@@ -412,9 +419,7 @@ pub fn write(out: &Path, summary: &SweepSummary, text: &str) -> std::io::Result<
         escape(&serde_json::to_string(&summary.ranges).unwrap_or_default()),
         escape(text)
     );
-    let index = out.join("index.html");
-    atomic::write(&index, html.as_bytes())?;
-    Ok(index)
+    atomic::write(&out.join("index.html"), html.as_bytes())
 }
 
 fn escape(text: &str) -> String {

@@ -7,9 +7,8 @@
 use nalgebra::IsometryMatrix3;
 use rapier3d::math::{Pose, Real, Rotation, Vector};
 use rapier3d::prelude::{
-    ActiveHooks, CoefficientCombineRule, ColliderBuilder, GenericJointBuilder, Group, InteractionGroups,
-    InteractionTestMode, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle, RigidBodyBuilder,
-    RigidBodyHandle, SharedShape,
+    CoefficientCombineRule, ColliderBuilder, GenericJointBuilder, Group, InteractionGroups, InteractionTestMode,
+    JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle, RigidBodyBuilder, RigidBodyHandle, SharedShape,
 };
 
 use super::convert::{mass_properties, pose_of, pose_of_quat, quat, rpy_pose, vec3, z_to_y};
@@ -206,13 +205,10 @@ impl RapierPlant {
                             object.length.unwrap_or(0.1) as Real / 2.0,
                             object.radius.unwrap_or(0.1) as Real,
                         )
-                        .position(z_to_y())
-                        // rapier 0.36 recycles a pair's contacts while the relative pose drifts less than
-                        // 5 cm (`contact_recycling`): normal and gap stay frozen. Exact on flat faces, but a
-                        // probe sliding over the drum rode the frozen tangent plane up to 5 mm off the
-                        // surface, still pushed, then dropped back and re-impacted (150-440 N). Pairs with
-                        // an active hook are never recycled; the hooks are `()`, which change nothing.
-                        .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
+                        // Its contacts are found anew every step like every pair's (no
+                        // recycling, see `RapierPlant`): a probe sliding over the drum follows its
+                        // curve, not a frozen tangent plane.
+                        .position(z_to_y()),
                     );
                     let handle = self.colliders.insert_with_parent(collider, body, &mut self.bodies);
                     self.object_colliders.push((handle, name.clone()));

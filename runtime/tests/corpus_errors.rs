@@ -43,7 +43,10 @@ fn malformed_urdfs_give_clear_errors() {
         ("008", "zero or non-finite axis"),
         ("009", "invalid limits"),
         ("010", "exactly one root link"),
-        ("011", "zero mass but a non-zero inertia"),
+        (
+            "011",
+            "zero mass and an inertia tensor that is not positive semi-definite",
+        ),
         ("012", "non-finite number in `joint j origin`"),
         ("013", "no movable joint"),
         ("014", "not a URDF"),

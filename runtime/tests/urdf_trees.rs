@@ -117,13 +117,13 @@ fn an_inertial_fixed_base_is_a_note_not_an_error() {
         notes.contains("link `base` is fixed to the base, so its inertial values are ignored"),
         "{notes}"
     );
-    // The same values on a moving link stay an error.
+    // The same values as the only link a joint moves are an error: the joint moves no mass.
     let moving = arm(false, 0.0).replace(
         &inertial(2.0, 0.1),
         &inertial(0.0, 0.1).replace(r#"ixx="0.01""#, r#"ixx="0.5""#),
     );
-    let err = Robot::from_urdf_str(&moving, None).expect_err("a moving link needs consistent inertia");
-    assert!(err.to_string().contains("zero mass but a non-zero inertia"), "{err}");
+    let err = Robot::from_urdf_str(&moving, None).expect_err("a moving body needs mass");
+    assert!(err.to_string().contains("joint `j2` moves no mass"), "{err}");
 }
 
 #[test]
@@ -156,4 +156,81 @@ fn a_xacro_file_is_refused_with_how_to_expand_it() {
         "{message}"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The joint-space mass matrix at `q`.
+fn mass_matrix(robot: &Robot, q: &[f64]) -> nalgebra::DMatrix<f64> {
+    let mut data = robot.data();
+    robot.forward_kinematics(&mut data, q);
+    let mut m = nalgebra::DMatrix::zeros(robot.dof(), robot.dof());
+    robot.mass_matrix(&mut data, &mut m);
+    m
+}
+
+#[test]
+fn an_expanded_urdf_that_still_declares_the_xacro_namespace_loads() {
+    let text = arm(false, 0.0).replace(
+        r#"<robot name="arm">"#,
+        r#"<robot name="arm" xmlns:xacro="http://www.ros.org/wiki/xacro">"#,
+    );
+    let robot = Robot::from_urdf_str(&text, Some("tip")).expect("no xacro element or expression remains");
+    assert_eq!(robot.dof(), 3);
+    // An element or expression that remains is still refused.
+    let macro_left = text.replace(
+        r#"<link name="tip"/>"#,
+        r#"<link name="tip"/><xacro:include filename="x.xacro"/>"#,
+    );
+    let err = Robot::from_urdf_str(&macro_left, Some("tip")).expect_err("a xacro element remains");
+    assert!(err.to_string().contains("xacro file"), "{err}");
+}
+
+#[test]
+fn a_massless_link_with_inertia_on_a_fixed_joint_is_lumped_with_a_note() {
+    // As Franka's panda_link8: zero mass, a non-zero tensor, hung on the hand by a fixed joint.
+    let tensor = r#"<inertia ixx="0.002" ixy="0.0005" ixz="0" iyy="0.003" iyz="0" izz="0.001"/>"#;
+    let mut with_link8 = arm(false, 0.0);
+    with_link8.truncate(with_link8.len() - "</robot>".len());
+    with_link8 += &format!(
+        r#"<link name="link8"><inertial><origin xyz="0 0 0.05"/><mass value="0"/>{tensor}</inertial></link><joint name="j8" type="fixed"><parent link="hand"/><child link="link8"/><origin xyz="0 0 0.1"/></joint></robot>"#
+    );
+    let robot = Robot::from_urdf_str(&with_link8, Some("tip")).expect("loads, as pinocchio loads it");
+    let notes = robot.notes().join("\n");
+    assert!(
+        notes.contains("link `link8` has zero mass but an inertia tensor"),
+        "{notes}"
+    );
+    // Ground truth: the same tensor added to the hand's own inertia (about its centre of mass;
+    // with no mass there is no parallel-axis term, so where it hangs does not matter).
+    let hand = r#"<link name="hand"><inertial><origin xyz="0 0 0.1"/><mass value="1"/><inertia ixx="0.012" ixy="0.0005" ixz="0" iyy="0.013" iyz="0" izz="0.011"/></inertial></link>"#;
+    let start = arm(false, 0.0).find(r#"<link name="hand">"#).expect("hand");
+    let plain = arm(false, 0.0);
+    let end = start + plain[start..].find("</link>").expect("end") + "</link>".len();
+    let merged = format!("{}{hand}{}", &plain[..start], &plain[end..]);
+    let reference = Robot::from_urdf_str(&merged, Some("tip")).expect("reference");
+    let without = Robot::from_urdf_str(&plain, Some("tip")).expect("without the link");
+    for q in [[0.0, 0.0, 0.0], [0.3, -0.7, 1.1], [-1.2, 0.4, -0.9]] {
+        let (a, b) = (mass_matrix(&robot, &q), mass_matrix(&reference, &q));
+        assert!((&a - &b).abs().max() < 1e-12, "{a} vs {b}");
+        assert!((&a - mass_matrix(&without, &q)).abs().max() > 1e-4, "the tensor counts");
+    }
+    // A tensor no body can have stays an error.
+    let bad = with_link8.replace(r#"ixx="0.002""#, r#"ixx="-0.002""#);
+    let err = Robot::from_urdf_str(&bad, Some("tip")).expect_err("not positive semi-definite");
+    assert!(err.to_string().contains("not positive semi-definite"), "{err}");
+}
+
+#[test]
+fn an_overflowing_number_is_refused_by_line_and_attribute_and_inf_is_not() {
+    let text = arm(false, 0.0).replacen(r#"effort="50""#, "\neffort=\"1e309\"", 1);
+    let err = Robot::from_urdf_str(&text, Some("tip")).expect_err("1e309 overflows");
+    assert_eq!(
+        err.to_string(),
+        "`<string>`, line 2: `1e309` in `effort` of `<limit>` is too large for a number (it would overflow to infinity); write a finite value, or `inf` where no limit is meant"
+    );
+    let origin = arm(false, 0.0).replacen(r#"<origin xyz="0 0 0.3"/>"#, r#"<origin xyz="0 -1e400 0.3"/>"#, 1);
+    let err = Robot::from_urdf_str(&origin, Some("tip")).expect_err("-1e400 overflows");
+    assert!(err.to_string().contains("`-1e400` in `xyz` of `<origin>`"), "{err}");
+    let inf = arm(false, 0.0).replacen(r#"effort="50""#, r#"effort="inf""#, 1);
+    let robot = Robot::from_urdf_str(&inf, Some("tip")).expect("the word inf is the user's choice");
+    assert!(robot.joints()[0].effort.is_infinite());
 }

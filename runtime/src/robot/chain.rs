@@ -17,8 +17,9 @@ pub(super) fn check_format(text: &str, file: &str) -> Result<(), RobotError> {
         what: what.to_owned(),
         hint: hint.to_owned(),
     };
-    let is_xacro = file.ends_with(".xacro") || text.contains("xmlns:xacro") || text.contains("<xacro:");
-    if is_xacro || text.contains("${") {
+    // An expanded file may still declare the xacro namespace on `<robot>` (most vendors'
+    // distributed URDFs do): only xacro elements or expressions that remain make it a macro file.
+    if text.contains("<xacro:") || text.contains("${") || text.contains("$(arg ") || text.contains("$(find ") {
         return Err(not_urdf(
             "a xacro file (macros and `${...}` expressions)",
             &format!("expand it to plain URDF first: `xacro {file} > robot.urdf` (ROS 2: `ros2 run xacro xacro {file} -o robot.urdf`), then load robot.urdf"),
@@ -224,11 +225,95 @@ fn held_value(joint: &urdf_rs::Joint) -> f64 {
     }
 }
 
+/// Refuses a number in an attribute that parses to infinity without being the word `inf`
+/// (`effort="1e309"`): the XML reader would turn it into infinity and switch a limit off
+/// silently. Linear in the text.
+pub(super) fn check_numbers(text: &str, file: &str) -> Result<(), RobotError> {
+    let bytes = text.as_bytes();
+    let mut line = 1;
+    let mut counted = 0;
+    let mut element_start = None;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            // A comment's quotes are prose (`don't`): skip it whole.
+            b'<' if bytes[i..].starts_with(b"<!--") => {
+                let Some(len) = text[i..].find("-->") else {
+                    return Ok(());
+                };
+                i += len + 3;
+                continue;
+            }
+            b'<' => element_start = Some(i + 1),
+            b'>' => element_start = None,
+            quote @ (b'"' | b'\'') if element_start.is_some() => {
+                let Some(len) = bytes[i + 1..].iter().position(|b| *b == quote) else {
+                    return Ok(()); // unterminated: the XML parser says so
+                };
+                let value = &text[i + 1..i + 1 + len];
+                for token in value.split_ascii_whitespace() {
+                    let word = token.trim_start_matches(['+', '-']).to_ascii_lowercase();
+                    let overflows =
+                        token.parse::<f64>().is_ok_and(f64::is_infinite) && word != "inf" && word != "infinity";
+                    if overflows {
+                        line += bytes[counted..i].iter().filter(|b| **b == b'\n').count();
+                        let before = &text[element_start.unwrap_or(i)..i];
+                        let element = before
+                            .split(|c: char| c.is_whitespace() || c == '/')
+                            .next()
+                            .unwrap_or("");
+                        let attribute = before
+                            .trim_end()
+                            .trim_end_matches('=')
+                            .trim_end()
+                            .rsplit(|c: char| c.is_whitespace())
+                            .next()
+                            .unwrap_or("");
+                        return Err(RobotError::Overflow {
+                            file: file.to_owned(),
+                            line,
+                            element: element.to_owned(),
+                            attribute: attribute.to_owned(),
+                            text: token.to_owned(),
+                        });
+                    }
+                }
+                i += len + 2;
+                continue;
+            }
+            b'\n' if element_start.is_none() => {
+                line += bytes[counted..=i].iter().filter(|b| **b == b'\n').count();
+                counted = i + 1;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
 /// A link's mass properties, with the leniency a link fixed to the base earns: its mass and
 /// inertia never enter the dynamics, so inconsistent values there are a note, not an error.
 fn link_inertial(link: &urdf_rs::Link, on_base: bool, notes: &mut Vec<String>) -> Result<Inertial, RobotError> {
     match inertial(link) {
         Ok((inertial, _)) => {
+            if !on_base && inertial.mass == 0.0 && inertial.inertia.iter().any(|v| *v != 0.0) {
+                notes.push(format!(
+                    "link `{}` has zero mass but an inertia tensor: its inertia is lumped as given into the body it is fixed to",
+                    link.name
+                ));
+            }
+            if on_base && inertial.mass == 0.0 && inertial.inertia.iter().any(|v| *v != 0.0) {
+                notes.push(format!(
+                    "link `{}` is fixed to the base, so its inertial values are ignored (zero mass with an inertia tensor)",
+                    link.name
+                ));
+                return Ok(Inertial {
+                    mass: 0.0,
+                    com: Vector3::zeros(),
+                    inertia: Matrix3::zeros(),
+                });
+            }
             if on_base && inertial.mass > 0.0 {
                 notes.push(format!(
                     "link `{}` is fixed to the base: its mass ({} kg) and inertia do not enter the dynamics",

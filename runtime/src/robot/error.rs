@@ -131,11 +131,29 @@ pub enum RobotError {
         /// The mass read.
         mass: f64,
     },
-    /// A mass of zero with a non-zero inertia tensor.
-    #[error("link `{link}` has zero mass but a non-zero inertia tensor")]
+    /// A mass of zero with an inertia tensor that is not positive semi-definite (a massless
+    /// link with a valid tensor loads, with a note).
+    #[error("link `{link}` has zero mass and an inertia tensor that is not positive semi-definite (eigenvalues {eigenvalues})")]
     ZeroMass {
         /// The link.
         link: String,
+        /// Its eigenvalues, for the message.
+        eigenvalues: String,
+    },
+    /// A number in the file too large for a float: it would overflow to infinity and switch a
+    /// limit off, or poison the dynamics. Only the word `inf` may stand for infinity.
+    #[error("`{file}`, line {line}: `{text}` in `{attribute}` of `<{element}>` is too large for a number (it would overflow to infinity); write a finite value, or `inf` where no limit is meant")]
+    Overflow {
+        /// The file.
+        file: String,
+        /// The 1-based line.
+        line: usize,
+        /// The element the attribute belongs to.
+        element: String,
+        /// The attribute.
+        attribute: String,
+        /// The number as written.
+        text: String,
     },
     /// An inertia tensor that is not symmetric positive definite.
     #[error("link `{link}` has an inertia tensor that is not positive definite (eigenvalues {eigenvalues})")]

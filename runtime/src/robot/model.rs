@@ -165,6 +165,7 @@ impl Robot {
 
     fn from_urdf_named(text: &str, file: &str, tool_link: Option<&str>) -> Result<Robot, RobotError> {
         super::chain::check_format(text, file)?;
+        super::chain::check_numbers(text, file)?;
         let urdf = urdf_rs::read_from_string(text).map_err(|err| RobotError::Urdf {
             file: file.to_owned(),
             message: err.to_string().replace('\n', " "),
@@ -310,10 +311,21 @@ pub(super) fn inertial(link: &urdf_rs::Link) -> Result<(Inertial, IsometryMatrix
     }
     let in_frame = Matrix3::new(i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz);
     if mass == 0.0 {
+        // A massless link with a rotational inertia (Franka's `panda_link8`): physically odd
+        // but simulable once lumped into a body with mass, as pinocchio does, so the tensor
+        // is taken as given when it is positive semi-definite (the caller notes it).
         if in_frame.iter().any(|v| *v != 0.0) {
-            return Err(RobotError::ZeroMass {
-                link: link.name.clone(),
-            });
+            let eigen = SymmetricEigen::new(in_frame);
+            let scale = in_frame.abs().max().max(f64::MIN_POSITIVE);
+            if eigen.eigenvalues.min() < -1e-12 * scale {
+                return Err(RobotError::ZeroMass {
+                    link: link.name.clone(),
+                    eigenvalues: format!(
+                        "{:.3e}, {:.3e}, {:.3e}",
+                        eigen.eigenvalues[0], eigen.eigenvalues[1], eigen.eigenvalues[2]
+                    ),
+                });
+            }
         }
     } else {
         let eigen = SymmetricEigen::new(in_frame);
@@ -475,10 +487,13 @@ pub(super) fn joint_info(joint: &urdf_rs::Joint, notes: &mut Vec<String>) -> Res
 
 /// Adds `inertial` (in link frame) placed at `link_in_body` to the body's mass properties.
 pub(super) fn lump(body: &mut Body, inertial: &Inertial, link_in_body: &IsometryMatrix3<f64>) {
+    let rot = link_in_body.rotation.matrix();
     if inertial.mass == 0.0 {
+        // A massless link's rotational inertia, if any, adds as given: with no mass it has no
+        // parallel-axis term and does not move the centre of mass.
+        body.inertia += rot * inertial.inertia * rot.transpose();
         return;
     }
-    let rot = link_in_body.rotation.matrix();
     let com = link_in_body * nalgebra::Point3::from(inertial.com);
     let inertia = rot * inertial.inertia * rot.transpose();
     let total = body.mass + inertial.mass;

@@ -54,6 +54,24 @@ fn parse(text: &str) -> Result<f64, String> {
         .map_err(|_| format!("`{text}` is not a number"))
 }
 
+/// `text` as a number where infinity switches something off: only the word `inf` (or
+/// `infinity`, either signed) may give it; a literal too large for a float (`1e400`) would
+/// overflow to infinity silently, so it is refused, as is NaN.
+pub fn number_or_inf(text: &str) -> Result<f64, String> {
+    let value = parse(text)?;
+    let word = text.trim().trim_start_matches(['+', '-']).to_ascii_lowercase();
+    if value.is_nan() {
+        return Err(format!("`{}` is not a number", text.trim()));
+    }
+    if value.is_infinite() && word != "inf" && word != "infinity" {
+        return Err(format!(
+            "`{}` is too large for a number (it would overflow to infinity); write `inf` to switch the limit off",
+            text.trim()
+        ));
+    }
+    Ok(value)
+}
+
 /// Clap parser for a rate in Hz (`--resample`, `--lowpass`).
 pub fn rate_hz(text: &str) -> Result<f64, String> {
     check("the rate", parse(text)?, RATE_HZ, " Hz")
@@ -87,5 +105,15 @@ mod tests {
         assert!(super::offset_m("nan").is_err());
         assert!(super::offset_m("1e308").is_err());
         assert!(super::offset_m("abc").unwrap_err().contains("not a number"));
+    }
+
+    #[test]
+    fn only_the_word_inf_is_infinite() {
+        assert_eq!(super::number_or_inf("inf"), Ok(f64::INFINITY));
+        assert_eq!(super::number_or_inf(" Infinity"), Ok(f64::INFINITY));
+        assert_eq!(super::number_or_inf("60"), Ok(60.0));
+        assert!(super::number_or_inf("1e400").unwrap_err().contains("overflow"));
+        assert!(super::number_or_inf("-1e309").unwrap_err().contains("overflow"));
+        assert!(super::number_or_inf("NaN").unwrap_err().contains("not a number"));
     }
 }

@@ -88,10 +88,7 @@ pub fn parse_limit(text: &str) -> Result<(String, f64), String> {
     let (name, value) = text
         .split_once('=')
         .ok_or_else(|| format!("`{text}`: write NAME=VALUE, e.g. force=60"))?;
-    let value: f64 = value
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{text}`: `{value}` is not a number"))?;
+    let value = crate::limits::number_or_inf(value).map_err(|err| format!("`{text}`: {err}"))?;
     let mut probe = skill_runtime::safety::Limits::for_skill(0.0, None);
     probe.set(name.trim(), value).map_err(|err| err.to_string())?;
     Ok((name.trim().to_string(), value))

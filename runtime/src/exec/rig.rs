@@ -214,7 +214,8 @@ impl<'p> Rig<'p> {
     }
 
     /// Moves the flange to `target` in free space along a minimum-jerk path, then holds briefly;
-    /// stops and holds where it is when the tool meets something ([`PREPOSE_CONTACT_N`]).
+    /// stops and holds where it is when the tool meets something ([`PREPOSE_CONTACT_N`]). The
+    /// move's duration is [`prepose_duration`]'s: within the run's speed limits and `--speed`.
     pub(super) fn prepose(
         &mut self,
         target: &Isometry3<f64>,
@@ -225,7 +226,14 @@ impl<'p> Rig<'p> {
         let start = self.flange();
         let distance = (target.translation.vector - start.translation.vector).norm();
         let angle = start.rotation.angle_to(&target.rotation);
-        let duration = (distance / 0.08).max(angle / 0.5).clamp(1.0, 8.0);
+        let lever = self.flange_to_tool.translation.vector.norm();
+        let duration = prepose_duration(
+            distance,
+            angle,
+            lever,
+            options.overrides.speed_factor,
+            self.supervisor.limits(),
+        );
         let hold = 0.3;
         let state = log.as_mut().map_or(0, |log| log.state_index("prepose"));
         let steps = ((duration + hold) / options.dt_s).round() as usize;
@@ -259,6 +267,51 @@ impl<'p> Rig<'p> {
         }
         Ok(())
     }
+}
+
+/// The nominal pre-positioning speeds, m/s and rad/s (times `--speed`), and the shortest and
+/// longest nominal move, s.
+const PREPOSE_SPEED_MPS: f64 = 0.08;
+const PREPOSE_ANGULAR_SPEED_RADPS: f64 = 0.5;
+const PREPOSE_NOMINAL_S: (f64, f64) = (1.0, 8.0);
+/// The fraction of a speed limit the pre-positioning path may command at its peak: the
+/// impedance's tracking lag and the sensor's noise stay well inside the rest.
+pub(super) const PREPOSE_LIMIT_FRACTION: f64 = 0.8;
+/// A minimum-jerk path of length `d` over `T` peaks at `15/8 d / T`.
+const MIN_JERK_PEAK: f64 = 1.875;
+
+/// How long the pre-positioning move of the flange over `distance_m` and `angle_rad` takes, s:
+/// the nominal 8 cm/s and 0.5 rad/s (between 1 and 8 s) slowed by `speed_factor` (`--speed`,
+/// a task's speed), and never so short that the minimum-jerk path's peak exceeds
+/// [`PREPOSE_LIMIT_FRACTION`] of the run's limits on the tool point's speed (the flange's plus
+/// the turn on the `lever_m` from flange to tool point) or angular speed.
+pub(super) fn prepose_duration(
+    distance_m: f64,
+    angle_rad: f64,
+    lever_m: f64,
+    speed_factor: f64,
+    limits: &Limits,
+) -> f64 {
+    let factor = if speed_factor.is_finite() && speed_factor > 0.0 {
+        speed_factor
+    } else {
+        1.0
+    };
+    let nominal = (distance_m / PREPOSE_SPEED_MPS)
+        .max(angle_rad / PREPOSE_ANGULAR_SPEED_RADPS)
+        .clamp(PREPOSE_NOMINAL_S.0, PREPOSE_NOMINAL_S.1)
+        / factor;
+    let within = |length: f64, limit: f64| {
+        let duration = MIN_JERK_PEAK * length / (PREPOSE_LIMIT_FRACTION * limit);
+        if duration.is_finite() {
+            duration
+        } else {
+            0.0
+        }
+    };
+    nominal
+        .max(within(distance_m + angle_rad * lever_m, limits.tool_speed_mps))
+        .max(within(angle_rad, limits.tool_angular_speed_radps))
 }
 
 fn tick_record(

@@ -217,7 +217,8 @@ pub fn run_skill(
     finish(result, rig, visits, start_s, location_of)
 }
 
-/// The longest pre-positioning move, hold included \[s\] (`Rig::prepose`: at most 8 s and 0.3 s).
+/// The longest nominal pre-positioning move, hold included \[s\] (`Rig::prepose`: at most 8 s and
+/// 0.3 s; tight speed limits or `--speed` below 1 make it longer, and the log then grows).
 const PREPOSE_MAX_S: f64 = 8.3;
 /// Runs longer than this many ticks reserve their log only this far (then it grows).
 const MAX_RESERVED_TICKS: usize = 300_000;

@@ -182,6 +182,24 @@ pub fn note_input(path: &Path) {
     }
 }
 
+/// A fingerprint of the contents of every input noted so far, whatever their paths: the
+/// FNV-1a hashes of their bytes, sorted, hashed again. Two processes that read the same files
+/// from different folders or machines agree on it.
+pub fn inputs_fingerprint() -> String {
+    let paths: Vec<PathBuf> = INPUTS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .iter()
+        .map(|input| input.path.clone())
+        .collect();
+    let mut hashes: Vec<String> = paths
+        .iter()
+        .map(|path| std::fs::read(path).map_or_else(|_| "unreadable".to_string(), |bytes| crate::defaults::fnv(&bytes)))
+        .collect();
+    hashes.sort();
+    crate::defaults::fnv(hashes.join("\n").as_bytes())
+}
+
 /// The noted input that `path` (through links) is, as it was named when read.
 fn noted_input(path: &Path) -> Option<PathBuf> {
     let meta = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;

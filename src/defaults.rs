@@ -126,7 +126,7 @@ fn same(path: &Path, text: &str) -> bool {
 }
 
 /// A 64-bit FNV-1a hash of `bytes`, in hex.
-fn fnv(bytes: &[u8]) -> String {
+pub(crate) fn fnv(bytes: &[u8]) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     for byte in bytes {
         hash ^= u64::from(*byte);

@@ -640,7 +640,88 @@ fn a_sweep_split_into_shares_and_merged_equals_the_whole_sweep() {
         "{}",
         String::from_utf8_lossy(&overlap.stderr)
     );
-    assert!(String::from_utf8_lossy(&overlap.stderr).contains("overlap"));
+    assert!(
+        String::from_utf8_lossy(&overlap.stderr).contains("is share 1/2 again"),
+        "{}",
+        String::from_utf8_lossy(&overlap.stderr)
+    );
+    // The folders `--out` named merge like their summaries.
+    let folders = skillc(&[
+        "eval",
+        "merge",
+        "--min-success",
+        "0",
+        "--out",
+        dir.join("merged-folders").to_str().expect("utf-8"),
+        dir.join("first").to_str().expect("utf-8"),
+        dir.join("second").to_str().expect("utf-8"),
+    ]);
+    assert_eq!(
+        folders.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&folders.stderr)
+    );
+    assert_eq!(
+        sweep_trials(&dir.join("merged-folders/summary.json")),
+        sweep_trials(&whole)
+    );
+    // Shares that do not belong together, edited or truncated shares, and missing shares.
+    let merge_of = |parts: &[&Path]| {
+        let mut args = vec![
+            "eval".to_string(),
+            "merge".into(),
+            "--min-success".into(),
+            "0".into(),
+            "--out".into(),
+            dir.join("refused").to_string_lossy().into_owned(),
+        ];
+        args.extend(parts.iter().map(|p| p.to_string_lossy().into_owned()));
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = skillc(&refs);
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut value: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&second).expect("second")).expect("json");
+        edit(&mut value);
+        let path = dir.join(name);
+        std::fs::write(&path, serde_json::to_string(&value).expect("json")).expect("write");
+        path
+    };
+    let other_settings = run("other", &["--partition", "2/2", "--limit", "force=60"]);
+    let (code, err) = merge_of(&[&first, &other_settings]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("comes from another sweep") && err.contains("other trials, files or settings"),
+        "{err}"
+    );
+    let three = edited("three.json", &|v| v["identity"]["shares"] = 3.into());
+    let (code, err) = merge_of(&[&first, &three]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("is not one of the 3 shares") || err.contains("another sweep"),
+        "{err}"
+    );
+    let seven = edited("seven.json", &|v| v["partitions"] = serde_json::json!(["7/2"]));
+    let (code, err) = merge_of(&[&first, &seven]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("K must lie in 1..=M"), "{err}");
+    let empty = edited("empty.json", &|v| v["trials"] = serde_json::json!([]));
+    let (code, err) = merge_of(&[&first, &empty]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("lacks draw #") && err.contains("did not finish"), "{err}");
+    let moved = edited("moved.json", &|v| v["partitions"] = serde_json::json!(["1/2"]));
+    let (code, err) = merge_of(&[&moved]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("which its share 1/2 does not run"), "{err}");
+    let (code, err) = merge_of(&[&first]);
+    assert_eq!(code, Some(1), "a lone share of two fails: {err}");
+    assert!(err.contains("lacks share 2/2"), "{err}");
+    assert!(
+        dir.join("refused/summary.json").is_file(),
+        "the partial report is written"
+    );
     let not_sweep = skillc(&[
         "eval",
         "merge",

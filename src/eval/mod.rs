@@ -168,6 +168,29 @@ pub struct Criteria {
 pub const DEFAULT_PEAK_BOUND: [f64; 2] = [2.0, 5.0];
 
 impl Criteria {
+    /// Refuses a criterion no trial could be judged by: a negative, NaN or infinite bound
+    /// (`stop_force_rel = -0.2` would fail every trial), a share outside 0 to 1. The message
+    /// names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        let bounded = |field: &str, value: Option<f64>, most: f64| match value {
+            Some(v) if !(v.is_finite() && (0.0..=most).contains(&v)) => {
+                Err(format!("`criteria.{field} = {v}` must be a number from 0 to {most}"))
+            }
+            _ => Ok(()),
+        };
+        bounded("force_rms_rel", self.force_rms_rel, 100.0)?;
+        bounded("contact_share", self.contact_share, 1.0)?;
+        bounded("stop_force_rel", self.stop_force_rel, 100.0)?;
+        if let Some([scale, offset]) = self.peak_force {
+            if !(scale.is_finite() && scale >= 0.0 && offset.is_finite() && offset >= 0.0) {
+                return Err(format!(
+                    "`criteria.peak_force = [{scale}, {offset}]` must be two finite numbers of at least 0 (a × the demonstration's peak + b N)"
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The peak force a run may reach \[N\]: `a × demo_peak_n + b` from [`Criteria::peak_force`].
     pub fn peak_bound(&self, demo_peak_n: f64) -> f64 {
         let [scale, offset] = self.peak_force.unwrap_or(DEFAULT_PEAK_BOUND);
@@ -418,6 +441,30 @@ pub fn run(args: &EvalArgs, verbosity: Verbosity) -> u8 {
     }
 }
 
+/// Worker threads per core at most: trials are CPU-bound, so more only adds memory and
+/// switching.
+const THREADS_PER_CORE: usize = 4;
+
+/// The worker threads an eval runs: `--threads` (default one per core), at most
+/// [`THREADS_PER_CORE`] per core and at most one per trial, saying so when it lowers the
+/// request (`--threads 100000` asked for thousands of threads and did not finish).
+fn worker_threads(requested: Option<usize>, trials: usize, verbosity: Verbosity) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let wanted = requested.filter(|n| *n > 0).unwrap_or(cores);
+    let most = (cores * THREADS_PER_CORE).min(trials.max(1));
+    if wanted > most && requested.is_some() {
+        verbosity.note(format_args!(
+            "--threads {wanted}: running {most} worker threads ({}; trials are CPU-bound)",
+            if most == trials.max(1) && trials.max(1) < cores * THREADS_PER_CORE {
+                format!("one per trial, {trials} trials")
+            } else {
+                format!("at most {THREADS_PER_CORE} per core, {cores} cores")
+            }
+        ));
+    }
+    wanted.min(most)
+}
+
 fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
     let (text, name, base_dir) = match &args.trials {
         Some(path) => {
@@ -433,11 +480,32 @@ fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
             let root = crate::defaults::root().map_err(Failure::Usage)?;
             let path = root.join(DEFAULT_TRIALS_PATH);
             let text = std::fs::read_to_string(&path).unwrap_or_else(|_| DEFAULT_TRIALS.to_string());
+            crate::atomic::note_input(&path);
             (text, DEFAULT_TRIALS_PATH.to_string(), root.join("examples/eval"))
         }
     };
     let trials: TrialsFile =
         toml::from_str(&text).map_err(|err| Failure::Input(format!("`{name}`: {}", err.to_string().trim())))?;
+    for (index, spec) in trials.skills.iter().enumerate() {
+        spec.criteria.validate().map_err(|err| {
+            Failure::Input(format!(
+                "`{name}`: `[[skill]]` entry {} (`{}`): {err}",
+                index + 1,
+                spec.file.display()
+            ))
+        })?;
+    }
+    for (index, spec) in trials.tasks.iter().enumerate() {
+        for (step, criteria) in &spec.criteria {
+            criteria.validate().map_err(|err| {
+                Failure::Input(format!(
+                    "`{name}`: `[[task]]` entry {} (`{}`), step `{step}`: {err}",
+                    index + 1,
+                    spec.file.display()
+                ))
+            })?;
+        }
+    }
     Ok((trials, base_dir))
 }
 
@@ -728,8 +796,16 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
             "the trials file lists no skill or task".into()
         }));
     }
+    let trials_count = match args.sweep {
+        Some(draws) => selected.len().saturating_mul(draws),
+        None => {
+            let skills: usize = selected.iter().map(|spec| spec.variants.len() * 2).sum();
+            skills + selected_tasks.iter().map(|spec| spec.variants.len()).sum::<usize>()
+        }
+    };
+    let threads = worker_threads(args.threads, trials_count, verbosity);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
+        .num_threads(threads)
         .build()
         .map_err(|err| Failure::Usage(format!("cannot start worker threads: {err}")))?;
 
@@ -1070,6 +1146,12 @@ fn run_sweep(
         per_skill: draws,
         partitions: vec![partition.to_string()],
         ranges: prepared.iter().map(|p| (p.name.clone(), p.spec.sweep)).collect(),
+        identity: Some(sweep::SweepIdentity {
+            skillc_version: env!("CARGO_PKG_VERSION").to_string(),
+            inputs: sweep_fingerprint(args),
+            skills: prepared.iter().map(|p| p.name.clone()).collect(),
+            shares: partition.m,
+        }),
         elapsed_s: started.elapsed().as_secs_f64(),
         trials: outcomes.into_iter().map(|o| o.result).collect(),
     };
@@ -1078,6 +1160,19 @@ fn run_sweep(
 
 /// Prints and writes a sweep's (or merged sweeps') report; exit 1 when a skill's success rate is
 /// below `min_success`.
+/// The fingerprint of a sweep's inputs: every file it read and the settings that change a draw.
+fn sweep_fingerprint(args: &EvalArgs) -> String {
+    let settings = format!(
+        "params {:?}\nlimits {:?}\nrobot {:?}\nskills {:?}\nfiles {}",
+        args.params,
+        args.limits,
+        args.robot,
+        args.skills,
+        crate::atomic::inputs_fingerprint()
+    );
+    crate::defaults::fnv(settings.as_bytes())
+}
+
 fn finish_sweep(
     out: &Path,
     summary: &sweep::SweepSummary,
@@ -1106,12 +1201,30 @@ fn finish_sweep(
     Ok(u8::from(!low.is_empty()))
 }
 
-/// `skillc eval merge`.
+/// `skillc eval merge`: each argument a share's `summary.json` or the folder its `--out` named.
+/// Shares that do not belong together are refused; missing shares fail the merge (exit 1)
+/// after its report is written.
 fn merge(out: &Path, min_success: f64, summaries: &[PathBuf], verbosity: Verbosity) -> Result<u8, Failure> {
     let mut parts = Vec::new();
-    for path in summaries {
-        let text = std::fs::read_to_string(path)
-            .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
+    let mut paths = Vec::new();
+    for given in summaries {
+        let path = if given.is_dir() {
+            given.join("summary.json")
+        } else {
+            given.clone()
+        };
+        let text = std::fs::read_to_string(&path).map_err(|err| {
+            Failure::Usage(format!(
+                "cannot read `{}`: {err}{}",
+                path.display(),
+                if given.is_dir() {
+                    " (is the folder a sweep's --out?)"
+                } else {
+                    ""
+                }
+            ))
+        })?;
+        crate::atomic::note_input(&path);
         let part: sweep::SweepSummary = serde_json::from_str(&text).map_err(|err| {
             Failure::Input(format!(
                 "`{}` is not a sweep summary of this skillc (written by `skillc eval --sweep`): {err}",
@@ -1119,11 +1232,21 @@ fn merge(out: &Path, min_success: f64, summaries: &[PathBuf], verbosity: Verbosi
             ))
         })?;
         parts.push((path.display().to_string(), part));
+        paths.push(path);
     }
-    let inputs: Vec<&Path> = summaries.iter().map(PathBuf::as_path).collect();
+    let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
     crate::atomic::refuse_inputs(&out.join("summary.json"), "--out", &inputs).map_err(Failure::Usage)?;
     let merged = sweep::merge(parts).map_err(Failure::Input)?;
-    finish_sweep(out, &merged, min_success, verbosity)
+    let code = finish_sweep(out, &merged.summary, min_success, verbosity)?;
+    if !merged.missing.is_empty() {
+        eprintln!(
+            "error: the merge lacks share{} {} of the sweep: its report covers only the shares given",
+            if merged.missing.len() == 1 { "" } else { "s" },
+            merged.missing.join(", ")
+        );
+        return Ok(1);
+    }
+    Ok(code)
 }
 
 /// The name `--skill` selects a skill's trials by: its `name`, else its file's stem.

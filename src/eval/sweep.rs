@@ -115,10 +115,29 @@ pub struct SweepSummary {
     pub partitions: Vec<String>,
     /// The ranges of each skill.
     pub ranges: BTreeMap<String, SweepRanges>,
+    /// What identifies the sweep a share belongs to; `None` in a summary of an older skillc,
+    /// which `eval merge` refuses.
+    #[serde(default)]
+    pub identity: Option<SweepIdentity>,
     /// Wall time of the trials \[s\] (summed over merged shares).
     pub elapsed_s: f64,
     /// One entry per trial run.
     pub trials: Vec<TrialResult>,
+}
+
+/// What every share of one sweep has in common, recorded in each share's summary so that
+/// `eval merge` joins only shares that belong together.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SweepIdentity {
+    /// The skillc version that ran the share.
+    pub skillc_version: String,
+    /// A fingerprint of the trials file, every file the sweep read (skills, demonstrations,
+    /// scenes, robots) and the settings that change a draw (`--param`, `--limit`, `--robot`).
+    pub inputs: String,
+    /// The skills in draw order: draw `i` of skill `s` has the global index `s × per_skill + i`.
+    pub skills: Vec<String>,
+    /// The number of shares the sweep was split into (M of `--partition K/M`).
+    pub shares: usize,
 }
 
 /// Which share of the draws to run: `K/M` runs every draw whose global index `i` has
@@ -428,12 +447,12 @@ fn escape(text: &str) -> String {
 
 /// Joins the summaries of a sweep's shares. They must come from the same sweep (version, seed,
 /// draws per skill, ranges) and hold no draw twice.
-pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<SweepSummary, String> {
+pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<Merged, String> {
     let mut parts = parts.into_iter();
     let Some((first_name, mut merged)) = parts.next() else {
         return Err("give the summary.json of every share to merge".to_string());
     };
-    let check = |name: &str, part: &SweepSummary| -> Result<(), String> {
+    let check = |name: &str, part: &SweepSummary| -> Result<Vec<Partition>, String> {
         if part.format_version != super::SUMMARY_VERSION || part.kind != "sweep" {
             return Err(format!(
                 "`{name}` is not a sweep summary of this skillc (format {} `{}`, expected {} `sweep`)",
@@ -442,9 +461,65 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<SweepSummary, String>
                 super::SUMMARY_VERSION
             ));
         }
+        let Some(identity) = &part.identity else {
+            return Err(format!(
+                "`{name}` records no sweep identity (written by an older skillc): run its share again"
+            ));
+        };
+        if part.partitions.is_empty() {
+            return Err(format!("`{name}` names no share (`partitions` is empty)"));
+        }
+        let mut shares = Vec::new();
+        for text in &part.partitions {
+            let share = parse_partition(text).map_err(|err| format!("`{name}`: share {err}"))?;
+            if share.m != identity.shares {
+                return Err(format!(
+                    "`{name}`: share `{text}` is not one of the {} shares its sweep was split into",
+                    identity.shares
+                ));
+            }
+            shares.push(share);
+        }
+        // Each trial must be a draw its shares run, and each share must hold all of its draws:
+        // a hand-edited or truncated summary is refused, not merged.
+        let expected = expected_draws(identity, part.per_skill, &shares);
+        let mut found = std::collections::BTreeSet::new();
+        for trial in &part.trials {
+            let key = (trial.skill.clone(), trial.draw.map_or(usize::MAX, |d| d.index));
+            if !expected.contains(&key) {
+                return Err(format!(
+                    "`{name}` holds draw #{} of `{}`, which its share{} {} does not run",
+                    key.1,
+                    key.0,
+                    if shares.len() == 1 { "" } else { "s" },
+                    part.partitions.join(", ")
+                ));
+            }
+            found.insert(key);
+        }
+        if let Some((skill, index)) = expected.difference(&found).next() {
+            return Err(format!(
+                "`{name}` lacks draw #{index} of `{skill}` of its share{} {} ({} of {} draws present): the share did not finish; run it again",
+                if shares.len() == 1 { "" } else { "s" },
+                part.partitions.join(", "),
+                found.len(),
+                expected.len()
+            ));
+        }
+        Ok(shares)
+    };
+    let mut shares_seen: BTreeMap<usize, String> = BTreeMap::new();
+    let mut note_shares = |name: &str, shares: Vec<Partition>| -> Result<(), String> {
+        for share in shares {
+            if let Some(earlier) = shares_seen.insert(share.k, name.to_string()) {
+                return Err(format!(
+                    "`{name}` is share {share} again (as `{earlier}`): give each share once"
+                ));
+            }
+        }
         Ok(())
     };
-    check(&first_name, &merged)?;
+    note_shares(&first_name, check(&first_name, &merged)?)?;
     let mut seen: std::collections::BTreeSet<(String, usize)> = std::collections::BTreeSet::new();
     let mut remember = |name: &str, trials: &[TrialResult]| -> Result<(), String> {
         for trial in trials {
@@ -460,13 +535,28 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<SweepSummary, String>
     };
     remember(&first_name, &merged.trials)?;
     for (name, part) in parts {
-        check(&name, &part)?;
+        let shares = check(&name, &part)?;
         if part.seed != merged.seed || part.per_skill != merged.per_skill || part.ranges != merged.ranges {
             return Err(format!(
                 "`{name}` comes from another sweep (seed {}, {} draws, or other ranges) than `{first_name}` (seed {}, {} draws)",
                 part.seed, part.per_skill, merged.seed, merged.per_skill
             ));
         }
+        if let (Some(a), Some(b)) = (&part.identity, &merged.identity) {
+            if a != b {
+                let what = if a.skillc_version != b.skillc_version {
+                    format!("skillc {} against {}", a.skillc_version, b.skillc_version)
+                } else if a.inputs != b.inputs {
+                    "other trials, files or settings (--param, --limit, --robot)".to_string()
+                } else if a.skills != b.skills {
+                    format!("the skills {} against {}", a.skills.join(", "), b.skills.join(", "))
+                } else {
+                    format!("{} shares against {}", a.shares, b.shares)
+                };
+                return Err(format!("`{name}` comes from another sweep than `{first_name}`: {what}"));
+            }
+        }
+        note_shares(&name, shares)?;
         remember(&name, &part.trials)?;
         merged.partitions.extend(part.partitions);
         merged.elapsed_s += part.elapsed_s;
@@ -475,7 +565,47 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<SweepSummary, String>
     merged
         .trials
         .sort_by(|a, b| (a.skill.as_str(), a.draw.map(|d| d.index)).cmp(&(b.skill.as_str(), b.draw.map(|d| d.index))));
-    Ok(merged)
+    let total = merged.identity.as_ref().map_or(1, |identity| identity.shares);
+    let missing: Vec<String> = (1..=total)
+        .filter(|k| !shares_seen.contains_key(k))
+        .map(|k| Partition { k, m: total }.to_string())
+        .collect();
+    merged.partitions = shares_seen
+        .keys()
+        .map(|&k| Partition { k, m: total }.to_string())
+        .collect();
+    Ok(Merged {
+        summary: merged,
+        missing,
+    })
+}
+
+/// What `eval merge` joined: the summary of the shares given, and the shares missing (a merge
+/// with missing shares writes its report and fails).
+#[derive(Debug)]
+pub struct Merged {
+    /// The joined summary.
+    pub summary: SweepSummary,
+    /// The shares not given, as `K/M` each.
+    pub missing: Vec<String>,
+}
+
+/// The draws (skill, index) that `shares` of a sweep run.
+fn expected_draws(
+    identity: &SweepIdentity,
+    per_skill: usize,
+    shares: &[Partition],
+) -> std::collections::BTreeSet<(String, usize)> {
+    let mut draws = std::collections::BTreeSet::new();
+    for (position, skill) in identity.skills.iter().enumerate() {
+        for index in 0..per_skill {
+            let global = position * per_skill + index;
+            if shares.iter().any(|share| share.runs(global)) {
+                draws.insert((skill.clone(), index));
+            }
+        }
+    }
+    draws
 }
 
 #[cfg(test)]

@@ -151,17 +151,23 @@ pub fn learn_from_demo(
     .map(|(learned, _)| learned)
 }
 
-/// Reads a demonstration: an MCAP file (a ROS 2 bag, by the extension `.mcap`) through
-/// [`crate::ros::read_demo`] with the topics of `bag`, else CSV in `dialect`. Returns it with
-/// the reader's notes (as warnings) and, for a bag, where the pose and wrench came from.
+/// Reads a demonstration: a ROS 2 bag (an MCAP file, by the extension `.mcap`, or a rosbag2
+/// folder; any folder is read as one, which says why it is not) through
+/// [`crate::ros::read_demo`] with the topics of `bag`, else CSV in `dialect`. A file named
+/// otherwise whose content is a bag is refused by what it is ([`crate::ros::misnamed_csv`];
+/// the bag reader refuses a `.mcap` that is not MCAP). Returns it with the reader's notes (as
+/// warnings) and, for a bag, where the pose and wrench came from.
 pub fn read_demo(
     path: &Path,
     dialect: &Dialect,
     bag: &BagOptions,
 ) -> Result<(Loaded, Vec<String>, Option<String>), Failure> {
     crate::atomic::note_input(path);
-    if crate::ros::is_mcap(path) {
+    if crate::ros::is_mcap(path) || path.is_dir() {
         return read_bag(path, bag);
+    }
+    if let Some(misnamed) = crate::ros::misnamed_csv(path) {
+        return Err(Failure::Input(misnamed));
     }
     let loaded = read_csv_as(path, &ReadOptions::default(), dialect).map_err(|err| match &err {
         // A file that cannot be read is an IO error; one that is not UTF-8 text is bad input.
@@ -190,7 +196,7 @@ fn read_bag(path: &Path, bag: &BagOptions) -> Result<(Loaded, Vec<String>, Optio
 #[cfg(not(feature = "mcap"))]
 fn read_bag(path: &Path, _bag: &BagOptions) -> Result<(Loaded, Vec<String>, Option<String>), Failure> {
     Err(Failure::Usage(format!(
-        "`{}` is an MCAP file, and this skillc was built without the `mcap` feature: build it with default features",
+        "`{}` is a ROS 2 bag (MCAP), and this skillc was built without the `mcap` feature: build it with default features",
         path.display()
     )))
 }

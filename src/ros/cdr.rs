@@ -260,7 +260,7 @@ impl<'a> CdrReader<'a> {
         Err(CdrError {
             offset: self.pos,
             reason: format!(
-                "{left} byte(s) are left over after the last field (`{last}`): the message is longer than this type (is it another type?)"
+                "{left} byte(s) are left over after the last field (`{last}`): the message is longer than this type"
             ),
         })
     }

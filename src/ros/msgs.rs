@@ -130,6 +130,18 @@ impl MsgType {
         .find(|ty| ty.schema_name().replace("/msg/", "/") == short)
     }
 
+    /// The names of the type's own fields, in order (what [`definition_fields`] reads out of
+    /// its definition).
+    pub fn field_names(self) -> &'static [&'static str] {
+        match self {
+            MsgType::PoseStamped => &["header", "pose"],
+            MsgType::WrenchStamped => &["header", "wrench"],
+            MsgType::TfMessage => &["transforms"],
+            MsgType::JointState => &["header", "name", "position", "velocity", "effort"],
+            MsgType::String => &["data"],
+        }
+    }
+
     /// The `ros2msg` definition: the type's fields, then each type it uses after a separator.
     pub fn definition(self) -> String {
         let (own, deps): (&str, &[&str]) = match self {
@@ -179,6 +191,17 @@ impl MsgType {
         }
         text
     }
+}
+
+/// The names of the top-level fields a `ros2msg` definition declares (the lines before the first
+/// `===` separator, without comments and constants): `["header", "wrench"]`.
+pub fn definition_fields(text: &str) -> Vec<&str> {
+    text.lines()
+        .take_while(|line| !line.starts_with("==="))
+        .map(|line| line.split('#').next().unwrap_or_default())
+        .filter(|line| !line.contains('='))
+        .filter_map(|line| line.split_whitespace().nth(1))
+        .collect()
 }
 
 /// The fields of a type that the definitions above depend on.
@@ -498,6 +521,19 @@ mod tests {
             Some(MsgType::TfMessage)
         );
         assert_eq!(MsgType::from_schema_name("geometry_msgs/msg/Pose"), None);
+        for ty in [
+            MsgType::PoseStamped,
+            MsgType::WrenchStamped,
+            MsgType::TfMessage,
+            MsgType::JointState,
+            MsgType::String,
+        ] {
+            assert_eq!(definition_fields(&ty.definition()), ty.field_names(), "{ty:?}");
+        }
+        // As rosbag2 writes them: comments, a type without its package, a constant.
+        let text =
+            "# A wrench\nstd_msgs/Header header # stamp\nWrench wrench\nint8 MODE=1\n\n=====\nMSG: x/Y\nfloat64 z\n";
+        assert_eq!(definition_fields(text), ["header", "wrench"]);
         assert!(MsgType::PoseStamped
             .definition()
             .contains("MSG: geometry_msgs/Quaternion\nfloat64 x"));

@@ -19,8 +19,8 @@ use mcap::sans_io::LinearReaderOptions;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use skill_runtime::demo::{orientation_warnings, Demo, Loaded, Normalised, WrenchDeclaration, WrenchFrame};
 
-use super::msgs::{decode_tf, MsgType, PoseStamped, WrenchStamped};
-use super::{BagError, BagOptions};
+use super::msgs::{decode_tf, definition_fields, MsgType, PoseStamped, WrenchStamped};
+use super::{bag, BagError, BagOptions};
 
 /// Largest MCAP record (a chunk, compressed or not) read into memory \[bytes\].
 pub const MAX_RECORD_BYTES: usize = 256 << 20;
@@ -84,18 +84,44 @@ impl<const N: usize> Stream<N> {
     }
 }
 
-/// A message that could not be used: its topic, index on the topic (from 1) and why.
+/// A message that could not be used: the file it is in (one of a rosbag2 folder's), its topic,
+/// its index on the topic (from 1; 0 for the channel's schema, before any message) and why.
 #[derive(Debug, Clone)]
 struct Problem {
+    file: String,
     topic: String,
     index: u64,
     reason: String,
 }
 
 impl Problem {
-    fn error(&self, file: &str) -> BagError {
-        message_error(file, &format!("topic `{}`", self.topic), self.index, &self.reason)
+    fn error(&self) -> BagError {
+        if self.index == 0 {
+            return BagError::Topics {
+                file: self.file.clone(),
+                reason: format!("topic `{}`: {}", self.topic, self.reason),
+            };
+        }
+        message_error(&self.file, &format!("topic `{}`", self.topic), self.index, &self.reason)
     }
+}
+
+/// A topic of the bag, whatever its type: its schema's name (empty without one) and the
+/// messages seen on it so far.
+#[derive(Debug)]
+struct TopicInfo {
+    topic: String,
+    schema: String,
+    count: u64,
+}
+
+/// What a channel of one file is read as: its type if skillc reads it, the stream it feeds
+/// (an index into `poses` or `wrenches`) and its topic (an index into `topics`).
+#[derive(Debug, Clone, Copy)]
+struct ChannelSlot {
+    kind: Option<MsgType>,
+    slot: usize,
+    topic: usize,
 }
 
 /// A TF edge's samples and the topics they came from.
@@ -117,12 +143,148 @@ struct Contents {
     n_transforms: usize,
     /// Topics of a known type whose messages are not CDR, with their encoding.
     not_cdr: Vec<(String, String)>,
+    /// Every topic, in the order first seen, and where each is in `topics`.
+    topics: Vec<TopicInfo>,
+    topic_slots: BTreeMap<String, usize>,
+    /// Messages read from all files.
+    n_messages: u64,
+}
+
+impl Contents {
+    /// Registers a channel of the file `file` the first time one of its messages is read.
+    fn register(&mut self, file: &str, channel: &mcap::Channel<'_>) -> ChannelSlot {
+        let topic = channel.topic.as_str();
+        let schema_name = channel
+            .schema
+            .as_ref()
+            .map(|schema| schema.name.clone())
+            .unwrap_or_default();
+        let topic_slot = match self.topic_slots.get(topic) {
+            Some(&slot) => slot,
+            None => {
+                self.topics.push(TopicInfo {
+                    topic: topic.to_owned(),
+                    schema: schema_name.clone(),
+                    count: 0,
+                });
+                self.topic_slots.insert(topic.to_owned(), self.topics.len() - 1);
+                self.topics.len() - 1
+            }
+        };
+        let kind = MsgType::from_schema_name(&schema_name)
+            .filter(|kind| matches!(kind, MsgType::PoseStamped | MsgType::WrenchStamped | MsgType::TfMessage));
+        let Some(kind) = kind else {
+            return ChannelSlot {
+                kind: None,
+                slot: 0,
+                topic: topic_slot,
+            };
+        };
+        if channel.message_encoding != "cdr" {
+            if !self.not_cdr.iter().any(|(t, _)| t == topic) {
+                self.not_cdr.push((topic.to_owned(), channel.message_encoding.clone()));
+            }
+            return ChannelSlot {
+                kind: None,
+                slot: 0,
+                topic: topic_slot,
+            };
+        }
+        // A schema whose definition is not the type its name says.
+        let schema_problem = channel.schema.as_ref().and_then(|schema| {
+            if schema.encoding != "ros2msg" {
+                return None;
+            }
+            let text = String::from_utf8_lossy(&schema.data);
+            let fields = definition_fields(&text);
+            let expected = kind.field_names();
+            if fields.is_empty() {
+                return None;
+            }
+            (fields != expected).then(|| Problem {
+                file: file.to_owned(),
+                topic: topic.to_owned(),
+                index: 0,
+                reason: format!(
+                    "its schema is named `{schema_name}` but defines the fields `{}`, and a {} has `{}`: the schema is not the type its name says; re-record the topic with its real type",
+                    fields.join("`, `"),
+                    kind.schema_name(),
+                    expected.join("`, `")
+                ),
+            })
+        });
+        let slot = match kind {
+            MsgType::PoseStamped => stream_slot(&mut self.poses, topic, schema_problem),
+            MsgType::WrenchStamped => stream_slot(&mut self.wrenches, topic, schema_problem),
+            _ => {
+                if !self.tf_topics.iter().any(|t| t == topic) {
+                    self.tf_topics.push(topic.to_owned());
+                }
+                if self.tf_problem.is_none() {
+                    self.tf_problem = schema_problem;
+                }
+                0
+            }
+        };
+        ChannelSlot {
+            kind: Some(kind),
+            slot,
+            topic: topic_slot,
+        }
+    }
+
+    /// The topics of the bag that are not of `kind`, with their schemas: `` `/a` (`pkg/msg/T`) ``.
+    fn other_topics(&self, kind: MsgType) -> String {
+        let others: Vec<String> = self
+            .topics
+            .iter()
+            .filter(|info| MsgType::from_schema_name(&info.schema) != Some(kind))
+            .take(12)
+            .map(|info| format!("`{}` ({})", info.topic, schema_label(&info.schema)))
+            .collect();
+        if others.is_empty() {
+            "none".into()
+        } else {
+            others.join(", ")
+        }
+    }
+
+    /// The schema of `topic`, if the bag has that topic.
+    fn schema_of(&self, topic: &str) -> Option<&str> {
+        self.topic_slots
+            .get(topic)
+            .map(|&slot| self.topics[slot].schema.as_str())
+    }
+}
+
+/// The stream of `topic` in `streams` (made if new), with a schema problem recorded on it.
+fn stream_slot<const N: usize>(streams: &mut Vec<Stream<N>>, topic: &str, schema_problem: Option<Problem>) -> usize {
+    let slot = match streams.iter().position(|stream| stream.topic == topic) {
+        Some(slot) => slot,
+        None => {
+            streams.push(Stream::new(topic));
+            streams.len() - 1
+        }
+    };
+    if streams[slot].problem.is_none() {
+        streams[slot].problem = schema_problem;
+    }
+    slot
+}
+
+/// A schema name for a message: `` `pkg/msg/T` `` or `no schema`.
+fn schema_label(schema: &str) -> String {
+    if schema.is_empty() {
+        "no schema".into()
+    } else {
+        format!("`{schema}`")
+    }
 }
 
 /// Reads the demonstration in the MCAP file at `path`.
 pub fn read_demo(path: &Path, options: &BagOptions) -> Result<BagDemo, BagError> {
     let file = path.display().to_string();
-    let contents = scan(path, &file)?;
+    let contents = scan_bag(path, &file)?;
     let mut notes = Vec::new();
     let (pose_source, parent_frame, child_frame, poses) = choose_pose(&file, &contents, options)?;
     let wrench = choose_wrench(&file, &contents, options)?;
@@ -374,63 +536,64 @@ fn rate_hz(ns: &[i64], order: &[usize]) -> f64 {
     }
 }
 
-/// Streams the file once, decoding every message of the three types skillc reads.
-fn scan(path: &Path, file: &str) -> Result<Contents, BagError> {
+/// Reads every file of the bag at `path` (an MCAP file or a rosbag2 folder) into one
+/// [`Contents`]: messages on a topic are counted on across files.
+fn scan_bag(path: &Path, file: &str) -> Result<Contents, BagError> {
+    let mut contents = Contents::default();
+    for part in bag::bag_files(path)? {
+        scan(&part, &part.display().to_string(), &mut contents)?;
+    }
+    if contents.n_messages == 0 {
+        return Err(BagError::Topics {
+            file: file.to_owned(),
+            reason: "the bag holds no messages: was it recorded with the topics subscribed?".into(),
+        });
+    }
+    Ok(contents)
+}
+
+/// Checks the MCAP file at `path` ([`bag::check_records`]), then streams it once with every CRC
+/// it stores checked (a chunk's before any of its messages is read), decoding every message of
+/// the three types skillc reads into `contents`.
+fn scan(path: &Path, file: &str, contents: &mut Contents) -> Result<(), BagError> {
+    bag::check_records(path, file, MAX_RECORD_BYTES as u64)?;
     let handle = File::open(path).map_err(|source| BagError::Io {
         file: file.to_owned(),
         source,
     })?;
     let reader = mcap::io::MessageReader::new_with_options(
         BufReader::new(handle),
-        LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+        LinearReaderOptions::default()
+            .with_record_length_limit(MAX_RECORD_BYTES)
+            .with_prevalidate_chunk_crcs(true)
+            .with_validate_data_section_crc(true)
+            .with_validate_summary_section_crc(true),
     );
-    let mut contents = Contents::default();
-    // Channel id → (kind, index into poses/wrenches, messages seen).
-    let mut channels: BTreeMap<u16, (Option<MsgType>, usize, u64)> = BTreeMap::new();
-    let mut n_messages = 0u64;
+    // Channel id → what its messages are read as (ids are per file).
+    let mut channels: BTreeMap<u16, ChannelSlot> = BTreeMap::new();
+    let mut n_in_file = 0u64;
+    // The last message read: its topic and index on it.
+    let mut last: Option<(usize, u64)> = None;
     for message in reader {
-        let message = message.map_err(|source| BagError::Mcap {
-            file: file.to_owned(),
-            messages: n_messages,
-            source,
-        })?;
-        n_messages += 1;
+        let message = message.map_err(|source| mcap_error(file, source, n_in_file, last, contents))?;
+        n_in_file += 1;
+        contents.n_messages += 1;
         let channel = &message.channel;
-        let entry = channels.entry(channel.id).or_insert_with(|| {
-            let kind = channel
-                .schema
-                .as_ref()
-                .and_then(|schema| MsgType::from_schema_name(&schema.name))
-                .filter(|kind| matches!(kind, MsgType::PoseStamped | MsgType::WrenchStamped | MsgType::TfMessage));
-            let topic = channel.topic.as_str();
-            if kind.is_some() && channel.message_encoding != "cdr" {
-                contents
-                    .not_cdr
-                    .push((topic.to_owned(), channel.message_encoding.clone()));
-                return (None, 0, 0);
+        let ChannelSlot { kind, slot, topic } = match channels.get(&channel.id) {
+            Some(entry) => *entry,
+            None => {
+                let entry = contents.register(file, channel);
+                channels.insert(channel.id, entry);
+                entry
             }
-            let slot = match kind {
-                Some(MsgType::PoseStamped) => {
-                    contents.poses.push(Stream::new(topic));
-                    contents.poses.len() - 1
-                }
-                Some(MsgType::WrenchStamped) => {
-                    contents.wrenches.push(Stream::new(topic));
-                    contents.wrenches.len() - 1
-                }
-                Some(_) => {
-                    contents.tf_topics.push(topic.to_owned());
-                    0
-                }
-                None => 0,
-            };
-            (kind, slot, 0)
-        });
-        entry.2 += 1;
-        let (kind, slot, index) = *entry;
+        };
+        contents.topics[topic].count += 1;
+        let index = contents.topics[topic].count;
+        last = Some((topic, index));
         let topic = channel.topic.as_str();
         let log_ns = message.log_time;
         let bad = |reason: String| Problem {
+            file: file.to_owned(),
             topic: topic.to_owned(),
             index,
             reason,
@@ -454,7 +617,7 @@ fn scan(path: &Path, file: &str) -> Result<Contents, BagError> {
                         });
                     }
                     Ok(_) => stream.problem = Some(bad(format!("more than {MAX_SAMPLES} poses; cut the bag shorter"))),
-                    Err(err) => stream.problem = Some(bad(format!("not a PoseStamped in CDR: {err}"))),
+                    Err(err) => stream.problem = Some(bad(not_decoded(MsgType::PoseStamped, &err, &message.data))),
                 }
             }
             Some(MsgType::WrenchStamped) => {
@@ -477,7 +640,7 @@ fn scan(path: &Path, file: &str) -> Result<Contents, BagError> {
                     Ok(_) => {
                         stream.problem = Some(bad(format!("more than {MAX_SAMPLES} wrenches; cut the bag shorter")))
                     }
-                    Err(err) => stream.problem = Some(bad(format!("not a WrenchStamped in CDR: {err}"))),
+                    Err(err) => stream.problem = Some(bad(not_decoded(MsgType::WrenchStamped, &err, &message.data))),
                 }
             }
             Some(MsgType::TfMessage) => {
@@ -510,19 +673,72 @@ fn scan(path: &Path, file: &str) -> Result<Contents, BagError> {
                             "more than {MAX_TRANSFORMS} transforms; cut the bag shorter"
                         )))
                     }
-                    Err(err) => contents.tf_problem = Some(bad(format!("not a TFMessage in CDR: {err}"))),
+                    Err(err) => contents.tf_problem = Some(bad(not_decoded(MsgType::TfMessage, &err, &message.data))),
                 }
             }
             _ => {}
         }
     }
-    if n_messages == 0 {
-        return Err(BagError::Topics {
+    Ok(())
+}
+
+/// Why a message of `kind` could not be decoded, and what its bytes are if they decode exactly
+/// as another type skillc reads (a PoseStamped recorded under a WrenchStamped schema).
+fn not_decoded(kind: MsgType, err: &super::cdr::CdrError, data: &[u8]) -> String {
+    let is = [
+        (MsgType::PoseStamped, PoseStamped::decode(data).is_ok()),
+        (MsgType::WrenchStamped, WrenchStamped::decode(data).is_ok()),
+        (MsgType::TfMessage, decode_tf(data).is_ok()),
+    ]
+    .into_iter()
+    .find(|(other, decodes)| *other != kind && *decodes);
+    let what = match is {
+        Some((other, _)) => format!(
+            "its bytes read exactly as a {}, so the topic carries another type than its schema names: re-record it with its real type",
+            other.schema_name()
+        ),
+        None => "the message is corrupt or of another type".to_owned(),
+    };
+    format!("not a {} in CDR: {err}; {what}", kind.schema_name())
+}
+
+/// The `mcap` crate's error for the file `file` after `n_in_file` of its messages, the last on
+/// `last`: a CRC that does not match is said as such, with where.
+fn mcap_error(
+    file: &str,
+    source: mcap::McapError,
+    n_in_file: u64,
+    last: Option<(usize, u64)>,
+    contents: &Contents,
+) -> BagError {
+    let crc = |section: &'static str, saved: u32, calculated: u32, place: String| BagError::Crc {
+        file: file.to_owned(),
+        section,
+        saved,
+        calculated,
+        place,
+    };
+    match source {
+        mcap::McapError::BadChunkCrc { saved, calculated } => {
+            let place = match last {
+                None => ", the file's first chunk of messages".to_owned(),
+                Some((topic, index)) => format!(
+                    ", the chunk after message {n_in_file} of the file (`{}` message {index}, counting from 1)",
+                    contents.topics[topic].topic
+                ),
+            };
+            crc("a chunk", saved, calculated, place)
+        }
+        mcap::McapError::BadDataCrc { saved, calculated } => crc("the data section", saved, calculated, String::new()),
+        mcap::McapError::BadSummaryCrc { saved, calculated } => {
+            crc("the summary section", saved, calculated, String::new())
+        }
+        source => BagError::Mcap {
             file: file.to_owned(),
-            reason: "the file holds no messages".into(),
-        });
+            messages: n_in_file,
+            source,
+        },
     }
-    Ok(contents)
 }
 
 fn list<const N: usize>(streams: &[Stream<N>]) -> String {
@@ -545,6 +761,28 @@ fn not_cdr_note(contents: &Contents) -> String {
     format!("; topics not in CDR were skipped: {}", topics.join(", "))
 }
 
+/// Why `--pose-topic NAME` (`flag`) cannot be the `kind` stream: the topic's schema is another
+/// type (named with the expected one), it is not CDR, or the bag has no such topic.
+fn wrong_topic(contents: &Contents, flag: &str, name: &str, kind: MsgType, candidates: &str) -> String {
+    let expected = kind.schema_name();
+    let candidates = if candidates.is_empty() { "none" } else { candidates };
+    if let Some((_, encoding)) = contents.not_cdr.iter().find(|(topic, _)| topic == name) {
+        return format!(
+            "{flag} `{name}` holds `{encoding}` messages, not CDR: skillc reads ROS 2's CDR only; the bag's {expected} topics in CDR: {candidates}"
+        );
+    }
+    match contents.schema_of(name) {
+        Some(schema) => format!(
+            "{flag} `{name}` has schema {}, not the expected `{expected}`: choose a topic of that type (the bag's: {candidates})",
+            schema_label(schema)
+        ),
+        None => format!(
+            "{flag} `{name}` is not a topic of the bag; its {expected} topics: {candidates}; its other topics: {}",
+            contents.other_topics(kind)
+        ),
+    }
+}
+
 type PoseChoice = (String, String, Option<String>, Vec<Sample<7>>);
 
 /// The pose samples: from `--pose-topic`, from TF when `--tf-parent`/`--tf-child` is given, else
@@ -556,37 +794,36 @@ fn choose_pose(file: &str, contents: &Contents, options: &BagOptions) -> Result<
         reason,
     };
     let use_tf = options.tf_parent.is_some() || options.tf_child.is_some();
-    let stream =
-        match &options.pose_topic {
-            Some(name) => {
-                match contents.poses.iter().find(|s| &s.topic == name) {
-                    Some(stream) => Some(stream),
-                    None if contents.tf_topics.contains(name) => None,
-                    None => {
-                        return Err(topics_error(format!(
-                    "--pose-topic `{name}` is not a geometry_msgs/msg/PoseStamped topic of the file; it has {}{}",
-                    if contents.poses.is_empty() { "none".to_owned() } else { list(&contents.poses) },
-                    not_cdr_note(contents)
+    let stream = match &options.pose_topic {
+        Some(name) => match contents.poses.iter().find(|s| &s.topic == name) {
+            Some(stream) => Some(stream),
+            None if contents.tf_topics.contains(name) => None,
+            None => {
+                return Err(topics_error(wrong_topic(
+                    contents,
+                    "--pose-topic",
+                    name,
+                    MsgType::PoseStamped,
+                    &list(&contents.poses),
                 )))
-                    }
-                }
             }
-            None if use_tf => None,
-            None => match contents.poses.as_slice() {
-                [only] => Some(only),
-                [] => None,
-                many => {
-                    return Err(topics_error(format!(
-                        "{} geometry_msgs/msg/PoseStamped topics: {}; choose one with --pose-topic",
-                        many.len(),
-                        list(many)
-                    )))
-                }
-            },
-        };
+        },
+        None if use_tf => None,
+        None => match contents.poses.as_slice() {
+            [only] => Some(only),
+            [] => None,
+            many => {
+                return Err(topics_error(format!(
+                    "{} geometry_msgs/msg/PoseStamped topics: {}; choose one with --pose-topic",
+                    many.len(),
+                    list(many)
+                )))
+            }
+        },
+    };
     if let Some(stream) = stream {
         if let Some(problem) = &stream.problem {
-            return Err(problem.error(file));
+            return Err(problem.error());
         }
         if stream.samples.len() < 2 {
             return Err(topics_error(format!(
@@ -604,7 +841,7 @@ fn choose_pose(file: &str, contents: &Contents, options: &BagOptions) -> Result<
     }
     // TF.
     if let Some(problem) = &contents.tf_problem {
-        return Err(problem.error(file));
+        return Err(problem.error());
     }
     let edges: Vec<(&(String, String), &TfEdge)> = contents
         .tf
@@ -667,36 +904,36 @@ fn choose_wrench<'c>(file: &str, contents: &'c Contents, options: &BagOptions) -
         file: file.to_owned(),
         reason,
     };
-    let stream =
-        match &options.wrench_topic {
-            Some(name) => {
-                contents.wrenches.iter().find(|s| &s.topic == name).ok_or_else(|| {
-                    topics_error(format!(
-                "--wrench-topic `{name}` is not a geometry_msgs/msg/WrenchStamped topic of the file; it has {}{}",
-                if contents.wrenches.is_empty() { "none".to_owned() } else { list(&contents.wrenches) },
-                not_cdr_note(contents)
+    let stream = match &options.wrench_topic {
+        Some(name) => contents.wrenches.iter().find(|s| &s.topic == name).ok_or_else(|| {
+            topics_error(wrong_topic(
+                contents,
+                "--wrench-topic",
+                name,
+                MsgType::WrenchStamped,
+                &list(&contents.wrenches),
             ))
-                })?
+        })?,
+        None => match contents.wrenches.as_slice() {
+            [only] => only,
+            [] => {
+                return Err(topics_error(format!(
+                    "no wrench: the file has no geometry_msgs/msg/WrenchStamped topic; its other topics: {}{}",
+                    contents.other_topics(MsgType::WrenchStamped),
+                    not_cdr_note(contents)
+                )))
             }
-            None => match contents.wrenches.as_slice() {
-                [only] => only,
-                [] => {
-                    return Err(topics_error(format!(
-                        "no wrench: the file has no geometry_msgs/msg/WrenchStamped topic{}",
-                        not_cdr_note(contents)
-                    )))
-                }
-                many => {
-                    return Err(topics_error(format!(
-                        "{} geometry_msgs/msg/WrenchStamped topics: {}; choose one with --wrench-topic",
-                        many.len(),
-                        list(many)
-                    )))
-                }
-            },
-        };
+            many => {
+                return Err(topics_error(format!(
+                    "{} geometry_msgs/msg/WrenchStamped topics: {}; choose one with --wrench-topic",
+                    many.len(),
+                    list(many)
+                )))
+            }
+        },
+    };
     if let Some(problem) = &stream.problem {
-        return Err(problem.error(file));
+        return Err(problem.error());
     }
     if stream.samples.is_empty() {
         return Err(topics_error(format!("wrench topic `{}` has no messages", stream.topic)));

@@ -456,7 +456,21 @@ fn run_task(
         write_log(path, &logs, &scene, || run.to_csv())?;
     }
     let mut text = String::new();
-    let _ = writeln!(text, "task `{}`: {} step(s)", task.name, run.steps.len());
+    // The header counts the task's own steps (run.steps also holds a fallback that ran).
+    let ran = run.steps.iter().filter(|step| !step.fallback).count();
+    let fallbacks: Vec<String> = run
+        .steps
+        .iter()
+        .filter(|step| step.fallback)
+        .map(|step| format!(", fallback `{}` ran", step.step))
+        .collect();
+    let _ = writeln!(
+        text,
+        "task `{}`: {ran} of {} step(s) ran{}",
+        task.name,
+        task.steps.len(),
+        fallbacks.concat()
+    );
     for step in &run.steps {
         let title = format!(
             "{}step `{}` ({})",

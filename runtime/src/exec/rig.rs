@@ -165,6 +165,7 @@ impl<'p> Rig<'p> {
         for step in 0..steps {
             if step > 0 {
                 self.sense();
+                self.supervisor.record_stop(self.controller.state());
             }
             self.supervisor.stop_torques(&self.obs, &mut self.torques);
             if let Some(log) = log.as_deref_mut() {
@@ -187,6 +188,7 @@ impl<'p> Rig<'p> {
             self.apply_and_step("reflex", dt)?;
         }
         self.sense();
+        self.supervisor.record_stop(self.controller.state());
         Ok(())
     }
 

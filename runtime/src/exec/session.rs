@@ -184,12 +184,12 @@ fn task_on(
     for (index, task_step) in steps.iter().enumerate() {
         let report = run_step(task_step, index == 0, false, &reports, rig)?;
         let failed = report.report.outcome == skill_ir::Outcome::Failure;
-        // After a reflex the arm stands stopped, as a real arm does until an operator looks:
-        // no fallback runs.
-        let reflex = report.report.reflex.is_some();
         reports.push(report);
         if failed {
-            if let (skill_ir::OnFailure::Fallback(fallback), false) = (&task_step.step.on_failure, reflex) {
+            // A step that ended in a reflex failed like any other: its `on failure` step runs,
+            // from where the damped stop left the arm, under a supervisor armed afresh (it was
+            // skipped silently before, which hid the fallback the task declares).
+            if let skill_ir::OnFailure::Fallback(fallback) = &task_step.step.on_failure {
                 if let Some(fallback) = fallbacks.get(*fallback as usize) {
                     let report = run_step(fallback, false, true, &reports, rig)?;
                     reports.push(report);

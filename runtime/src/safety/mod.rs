@@ -377,6 +377,21 @@ impl Supervisor {
         Ok(())
     }
 
+    /// Counts a tick of the reflex stop in the statistics: the force and speed peaks of a run
+    /// include the ticks after the crossing, while the arm is brought to its damped stop (an
+    /// impact's force goes on rising for a few ticks after it crosses the limit).
+    pub fn record_stop(&mut self, sensed: &ControlState) {
+        let force = sensed.applied.fixed_rows::<3>(0).norm();
+        let speed = sensed.twist.fixed_rows::<3>(0).norm();
+        let stats = &mut self.stats;
+        if force.is_finite() {
+            stats.peak_force_n = stats.peak_force_n.max(force);
+        }
+        if speed.is_finite() {
+            stats.peak_tool_speed_mps = stats.peak_tool_speed_mps.max(speed);
+        }
+    }
+
     /// The torques of the reflex stop at `obs`: gravity compensation from the robot model and
     /// joint damping, within the effort limits. Zero torques when the state itself is not finite.
     pub fn stop_torques(&mut self, obs: &Observation, out: &mut [f64]) {

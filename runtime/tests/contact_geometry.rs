@@ -70,9 +70,9 @@ impl Object {
         Isometry3::from_parts(Translation3::from(Vector3::from(self.xyz) + pressed), rotation)
     }
 
-    fn toml(&self) -> String {
+    fn toml(&self, friction: f64) -> String {
         let head = format!(
-            "[objects.{}]\nxyz = {:?}\nrpy = {:?}\nfriction = 0.4\n",
+            "[objects.{}]\nxyz = {:?}\nrpy = {:?}\nfriction = {friction}\n",
             self.name, self.xyz, self.rpy
         );
         let body = match self.shape {
@@ -150,6 +150,8 @@ struct Case {
     /// Whether the tip must touch, and whether it must leave contact again after touching.
     touches: bool,
     leaves: bool,
+    /// The objects' friction coefficient.
+    friction: f64,
 }
 
 /// The set point's height for a tip resting on a surface at `top`.
@@ -172,6 +174,8 @@ struct Outcome {
     excess_depth_m: f64,
     closest_shaft_m: f64,
     arm_contact_n: f64,
+    /// Every tick's tip centre and contact force on the tool (base frame).
+    trace: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
 fn scene_for(case: &Case) -> Scene {
@@ -182,7 +186,7 @@ fn scene_for(case: &Case) -> Scene {
          [sim]\ndt = 0.001\n[sensor]\nnoise_force_n = 0.0\nnoise_torque_nm = 0.0\n",
     );
     for object in &case.objects {
-        text += &object.toml();
+        text += &object.toml(case.friction);
     }
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes");
     Scene::from_toml(&text, case.name, &dir).expect("the suite's scene is valid")
@@ -280,6 +284,9 @@ fn run(case: &Case) -> Outcome {
         let (after, shaft) = distances(&plant, &tip);
         let wrench = plant.ideal_wrench_base();
         let force_n = wrench.fixed_rows::<3>(0).norm();
+        outcome
+            .trace
+            .push((tip.translation.vector, wrench.fixed_rows::<3>(0).into_owned()));
         outcome.ticks += 1;
         outcome.peak_n = outcome.peak_n.max(force_n);
         outcome.deepest_m = outcome.deepest_m.max(-after);
@@ -339,6 +346,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.52, 0.0, z], [0.62, 0.0, z]],
             touches: true,
             leaves: true,
+            friction: 0.4,
         },
         Case {
             name: "off_the_side",
@@ -346,6 +354,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.55, -0.04, z], [0.55, 0.04, z]],
             touches: true,
             leaves: true,
+            friction: 0.4,
         },
         Case {
             name: "step_down",
@@ -353,6 +362,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.52, 0.0, z], [0.60, 0.0, z]],
             touches: true,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "step_up",
@@ -360,6 +370,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.52, 0.0, z], [0.60, 0.0, z]],
             touches: true,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "slot_narrower_than_the_sphere",
@@ -367,6 +378,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.52, 0.0, z], [0.60, 0.0, z]],
             touches: true,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "slot_wider_than_the_sphere",
@@ -378,6 +390,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.52, 0.0, z], [0.61, 0.0, z]],
             touches: true,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "seam_one_mm_down",
@@ -385,6 +398,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.52, 0.0, z], [0.60, 0.0, z], [0.52, 0.0, z]],
             touches: true,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "past_a_side_1_5_mm_clear",
@@ -392,6 +406,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.5615, 0.0, 0.33], [0.5615, 0.0, 0.26], [0.5615, 0.0, 0.33]],
             touches: false,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "past_a_button_1_5_mm_clear",
@@ -407,6 +422,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.5815, 0.0, 0.33], [0.5815, 0.0, 0.27], [0.5815, 0.0, 0.33]],
             touches: false,
             leaves: false,
+            friction: 0.4,
         },
         Case {
             name: "over_a_button",
@@ -422,6 +438,7 @@ fn cases() -> Vec<Case> {
             path: vec![[0.53, 0.0, 0.305], [0.60, 0.0, 0.305]],
             touches: true,
             leaves: true,
+            friction: 0.4,
         },
     ];
     // A box tilted about y (its top rising along x) and about x, off its far edge.
@@ -443,6 +460,7 @@ fn cases() -> Vec<Case> {
         ],
         touches: true,
         leaves: true,
+        friction: 0.4,
     });
     // A drum along y (the shipped cylinder scene's), crossed along x over its crown, and a
     // drum along x slid along its top and off its end.
@@ -468,6 +486,7 @@ fn cases() -> Vec<Case> {
             .collect(),
         touches: true,
         leaves: false,
+        friction: 0.4,
     });
     let along = Object {
         name: "drum",
@@ -496,6 +515,7 @@ fn cases() -> Vec<Case> {
         ],
         touches: true,
         leaves: true,
+        friction: 0.4,
     });
     cases
 }
@@ -554,4 +574,80 @@ fn contact_force_only_where_the_geometry_touches() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Where the contact is lost after the last tick of force above 0.5 N (the force's magnitude,
+/// or with `horizontal` its x component: an edge's push), and the mean force on the flat
+/// (x in [0.53, 0.55] m, the tip lower than a radius above the top).
+fn witness_figures(trace: &[(Vector3<f64>, Vector3<f64>)], horizontal: bool) -> (Option<f64>, f64) {
+    let (mut touched, mut lost) = (false, None);
+    for (tip, force) in trace {
+        let value = if horizontal { force.x.abs() } else { force.norm() };
+        if value > 0.5 {
+            (touched, lost) = (true, None);
+        } else if touched && lost.is_none() {
+            lost = Some(tip.x);
+        }
+    }
+    let flat: Vec<f64> = trace
+        .iter()
+        .filter(|(tip, _)| (0.53..=0.55).contains(&tip.x) && tip.z < 0.300 + TIP_RADIUS)
+        .map(|(_, force)| force.norm())
+        .collect();
+    (lost, flat.iter().sum::<f64>() / flat.len().max(1) as f64)
+}
+
+/// The cases `bench/peers/mujoco_edge_step.py` runs in MuJoCo, frictionless: the figures it
+/// compares (benches/README.md has the table). Geometry alone bounds them here: the tip leaves
+/// the table's end between the edge and a radius past it, the step's edge before the tip is over
+/// the lower top by a radius, and the flat carries the impedance's 10 N within 5 %.
+#[test]
+fn witness_cases_lose_contact_where_the_geometry_ends() {
+    let z = pressing(0.300);
+    let cases = [
+        (
+            Case {
+                name: "witness_off_the_end",
+                objects: vec![table("table", 0.35, 0.58, 0.300)],
+                path: vec![[0.52, 0.0, z], [0.62, 0.0, z]],
+                touches: true,
+                leaves: true,
+                friction: 0.0,
+            },
+            false,
+            0.58,
+        ),
+        (
+            Case {
+                name: "witness_step_down",
+                objects: vec![table("upper", 0.35, 0.56, 0.300), table("lower", 0.56, 0.75, 0.295)],
+                path: vec![[0.52, 0.0, z], [0.60, 0.0, z]],
+                touches: true,
+                leaves: false,
+                friction: 0.0,
+            },
+            true,
+            0.56,
+        ),
+    ];
+    for (case, horizontal, edge) in cases {
+        let outcome = run(&case);
+        let (lost, flat) = witness_figures(&outcome.trace, horizontal);
+        let lost = lost.expect("the contact is lost");
+        eprintln!(
+            "{:20} contact lost at x = {lost:.4} m, steady force {flat:.3} N",
+            case.name
+        );
+        assert!(
+            lost > edge && lost < edge + TIP_RADIUS,
+            "{}: lost at {lost:.4} m",
+            case.name
+        );
+        assert!(
+            (flat - PRESS).abs() < 0.05 * PRESS,
+            "{}: {flat:.3} N on the flat",
+            case.name
+        );
+        assert!(outcome.force_when_clear_n <= NO_FORCE, "{}", case.name);
+    }
 }

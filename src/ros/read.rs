@@ -1,14 +1,17 @@
-//! Reading a demonstration out of an MCAP file (a ROS 2 bag): the tool pose from a
-//! `geometry_msgs/PoseStamped` topic or from TF (`tf2_msgs/TFMessage`, one parent → child
-//! transform), the wrench from a `geometry_msgs/WrenchStamped` topic, resampled onto the pose's
-//! times by linear interpolation.
+//! Reading a demonstration out of a ROS 2 bag (an MCAP file, or a rosbag2 folder of them): the
+//! tool pose from a `geometry_msgs/PoseStamped` topic or from TF (`tf2_msgs/TFMessage`, one
+//! parent → child transform), the wrench from a `geometry_msgs/WrenchStamped` topic, resampled
+//! onto the pose's times by linear interpolation.
 //!
 //! Topics are chosen by the caller ([`BagOptions`]) or found by type: the one topic of the type,
 //! else an error listing the candidates. Times are the header stamps, or the log times for a
-//! stream whose stamps are all zero, counted from the first pose sample. The file is streamed
-//! (memory grows with the kept samples and the largest chunk, each bounded), and a malformed
+//! stream whose stamps are all zero, counted from the first pose sample. Each file's records
+//! are walked first ([`bag::check_records`]: sizes against bytes), then it is streamed with its
+//! CRCs checked, a chunk's before any of its messages is used (memory grows with the kept
+//! samples and the largest chunk, each bounded). A channel's schema must be the type its name
+//! says, and every message must decode to its last byte (CDR's end padding aside). A malformed
 //! file or message is an error naming the file, the topic and the message's index on its topic
-//! (counted from 1).
+//! (counted from 1, on across a folder's files).
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -281,7 +284,7 @@ fn schema_label(schema: &str) -> String {
     }
 }
 
-/// Reads the demonstration in the MCAP file at `path`.
+/// Reads the demonstration in the bag at `path`: an MCAP file or a rosbag2 folder.
 pub fn read_demo(path: &Path, options: &BagOptions) -> Result<BagDemo, BagError> {
     let file = path.display().to_string();
     let contents = scan_bag(path, &file)?;
@@ -571,12 +574,10 @@ fn scan(path: &Path, file: &str, contents: &mut Contents) -> Result<(), BagError
     );
     // Channel id → what its messages are read as (ids are per file).
     let mut channels: BTreeMap<u16, ChannelSlot> = BTreeMap::new();
-    let mut n_in_file = 0u64;
     // The last message read: its topic and index on it.
     let mut last: Option<(usize, u64)> = None;
-    for message in reader {
-        let message = message.map_err(|source| mcap_error(file, source, n_in_file, last, contents))?;
-        n_in_file += 1;
+    for (n_before, message) in (0u64..).zip(reader) {
+        let message = message.map_err(|source| mcap_error(file, source, n_before, last, contents))?;
         contents.n_messages += 1;
         let channel = &message.channel;
         let ChannelSlot { kind, slot, topic } = match channels.get(&channel.id) {

@@ -152,3 +152,36 @@ fn bad_settings_are_refused_naming_the_setting() {
     assert_eq!(code, Some(1), "{text}");
     assert!(text.contains("not finite"), "{text}");
 }
+
+#[test]
+fn a_count_set_in_exponent_form_is_a_whole_number() {
+    let file = root().join("compiler/tests/corpus/ok/params.skill");
+    let compiled = |value: &str| skillc::load::load_program_with(&file, &[format!("presses={value}")]);
+    for (value, repeat) in [("1e3", 1000), ("3.0", 3), ("2", 2)] {
+        let Ok(program) = compiled(value) else {
+            panic!("presses={value} compiles")
+        };
+        fn repeats(value: &serde_json::Value, out: &mut Vec<u64>) {
+            match value {
+                serde_json::Value::Object(map) => {
+                    out.extend(map.get("repeat").and_then(serde_json::Value::as_u64));
+                    map.values().for_each(|v| repeats(v, out));
+                }
+                serde_json::Value::Array(items) => items.iter().for_each(|v| repeats(v, out)),
+                _ => {}
+            }
+        }
+        let mut found = Vec::new();
+        repeats(&serde_json::to_value(&program).expect("json"), &mut found);
+        assert!(found.contains(&repeat), "presses={value}: repeats {found:?}");
+    }
+    for value in ["2.5", "-1", "1e4"] {
+        let Err(skillc::load::Failure::Input(message)) = compiled(value) else {
+            panic!("presses={value} is refused")
+        };
+        assert!(
+            message.contains("whole number") || message.contains("between 1 and"),
+            "presses={value}: {message}"
+        );
+    }
+}

@@ -404,9 +404,7 @@ impl Checker<'_> {
         // A whole number out of range (0, or more than fits) gets the same message as one above
         // the maximum: the bounds are 1 and MAX_REPEAT, whatever `count` allows.
         let whole = match &count.kind {
-            ExprKind::Number(number) if !number.text.contains(['.', 'e', 'E', '-']) => {
-                Some(number.text.parse::<u64>().unwrap_or(u64::MAX))
-            }
+            ExprKind::Number(number) => super::values::whole_number(&number.text),
             _ => None,
         };
         let n = match whole {

@@ -124,11 +124,12 @@ impl Checker<'_> {
         }
     }
 
-    /// A positive integer that fits in `u32`.
+    /// A positive integer that fits in `u32`, written as digits or in any form whose value is
+    /// whole (`1e3`, `2.0`: a `--param taps=1e3` is a thousand taps).
     pub(super) fn count(&mut self, expr: &ast::Expr, what: &str) -> Option<u32> {
         match &expr.kind {
-            ExprKind::Number(number) if !number.text.contains(['.', 'e', 'E', '-']) => {
-                match number.text.parse::<u32>() {
+            ExprKind::Number(number) if whole_number(&number.text).is_some() => {
+                match u32::try_from(whole_number(&number.text).unwrap_or(u64::MAX)) {
                     Ok(value) if value > 0 => Some(value),
                     _ => {
                         let diag = self.diag(
@@ -366,4 +367,24 @@ impl Checker<'_> {
 
 fn example_quantity(dim: Dim) -> String {
     format!("5 {}", dim.example_unit())
+}
+
+/// The value of a number literal when it is whole and not negative (`3`, `1e3`, `2.0`),
+/// saturating at `u64::MAX` (a whole number too large to count is out of range, not "not
+/// whole"); `None` for a fraction, a negative number or NaN.
+pub(super) fn whole_number(text: &str) -> Option<u64> {
+    if !text.contains(['.', 'e', 'E', '-', '+']) {
+        return Some(text.parse::<u64>().unwrap_or(u64::MAX));
+    }
+    let value: f64 = text.parse().ok()?;
+    if value.is_infinite() && value > 0.0 {
+        return Some(u64::MAX);
+    }
+    (value.is_finite() && value >= 0.0 && value.fract() == 0.0).then(|| {
+        if value >= u64::MAX as f64 {
+            u64::MAX
+        } else {
+            value as u64
+        }
+    })
 }

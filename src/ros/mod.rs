@@ -201,7 +201,7 @@ pub enum BagError {
         reason: String,
     },
     /// The file is not MCAP, or its records are corrupt (after `messages` good messages).
-    #[error("`{file}` is not a readable MCAP file (after {messages} message(s)): {source}")]
+    #[error("`{file}` is not a readable MCAP file (after {messages} message(s)): {source}: it is corrupt; export it again, or recover what it holds with `mcap recover`")]
     Mcap {
         /// Path of the file.
         file: String,

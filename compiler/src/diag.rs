@@ -61,8 +61,13 @@ codes! {
     InvalidUtf8 => "skill::syntax::invalid_utf8", Error;
     /// The file is larger than a template can reasonably be (see [`crate::MAX_SOURCE_BYTES`]).
     FileTooLarge => "skill::syntax::file_too_large", Error;
-    /// Brackets or braces nested deeper than [`crate::MAX_NESTING`]: `[[[[[[...`.
+    /// Brackets, braces and `not`s nested deeper than [`crate::MAX_NESTING`]: `[[[[[[...`,
+    /// `on not not not ... motion_done`.
     TooDeep => "skill::syntax::too_deep", Error;
+    /// A character the grammar cannot take outside strings and comments, named by code point
+    /// and what it looks like: a no-break space in `on\u{a0}motion_done`, a Cyrillic `а`; or a
+    /// NUL anywhere.
+    UnexpectedCharacter => "skill::syntax::unexpected_character", Error;
     /// The text does not follow the grammar: `skill { }` (a name is missing).
     Unexpected => "skill::syntax::unexpected", Error;
     /// A name declared twice in one scope: two `state approach` in a skill.

@@ -40,6 +40,12 @@ impl From<Span> for miette::SourceSpan {
 }
 
 /// A named source text, shared cheaply between diagnostics.
+///
+/// The text is what an editor shows: a byte order mark (U+FEFF) that opens the file, which
+/// editors write and hide, is not part of it. Every [`Span`] is a byte offset into this text, so
+/// in a file that starts with a byte order mark an offset is three bytes short of the same place
+/// in the file's bytes, while lines and columns ([`SourceFile::line_col`]) are those the editor
+/// shows either way.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SourceFile {
     /// The name shown to the user (a path as given on the command line).
@@ -50,9 +56,12 @@ pub struct SourceFile {
 }
 
 impl SourceFile {
-    /// A source file from its name and text.
+    /// A source file from its name and text, without the byte order mark it may start with.
     pub fn new(name: impl Into<String>, text: impl Into<Arc<str>>) -> Self {
-        let text: Arc<str> = text.into();
+        let mut text: Arc<str> = text.into();
+        if let Some(rest) = text.strip_prefix(BYTE_ORDER_MARK) {
+            text = rest.into();
+        }
         let line_starts = std::iter::once(0)
             .chain(text.match_indices('\n').map(|(at, _)| at + 1))
             .collect();
@@ -81,6 +90,9 @@ impl SourceFile {
     }
 }
 
+/// The byte order mark a file may start with; [`SourceFile::new`] drops it.
+pub const BYTE_ORDER_MARK: char = '\u{FEFF}';
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -93,5 +105,16 @@ mod tests {
         assert_eq!(src.line_col(5), (2, 2));
         assert_eq!(src.line_col(7), (3, 1));
         assert_eq!(src.line_col(100), (3, 1));
+    }
+
+    #[test]
+    fn a_leading_byte_order_mark_is_not_part_of_the_text() {
+        let src = SourceFile::new("a.skill", "\u{FEFF}skill s {}\n");
+        assert_eq!(&*src.text, "skill s {}\n");
+        assert_eq!(src.line_col(6), (1, 7), "columns as the editor shows them");
+        assert_eq!(src.slice(Span::new(6, 7)), "s");
+        // Only one, and only at the start: another is a character of the text.
+        let src = SourceFile::new("a.skill", "\u{FEFF}\u{FEFF}x");
+        assert_eq!(&*src.text, "\u{FEFF}x");
     }
 }

@@ -2,7 +2,8 @@
 //!
 //! pest cannot recover after an error, so a file with a syntax error yields one
 //! diagnostic and an empty tree. Input that would make pest recurse or run long
-//! (deep nesting, huge files) is refused before pest sees it.
+//! (deep nesting, huge files) is refused before pest sees it, and so are characters the
+//! grammar cannot take, each named (`syntax/prescan.rs`).
 
 use crate::ast::*;
 use crate::diag::{Code, Diag};
@@ -11,6 +12,8 @@ use pest::error::InputLocation;
 use pest::iterators::Pair;
 use pest::Parser;
 use skill_grammar::{Rule, SkillParser};
+
+mod prescan;
 
 /// Parses one file. Never panics; bad input gives diagnostics and an empty file.
 pub fn parse(src: &SourceFile, file: usize) -> (File, Vec<Diag>) {
@@ -28,8 +31,9 @@ pub fn parse(src: &SourceFile, file: usize) -> (File, Vec<Diag>) {
         ));
         return (File::default(), vec![diag]);
     }
-    if let Some(diag) = check_nesting(src, file) {
-        return (File::default(), vec![diag]);
+    let refused = prescan::prescan(&src.text, file);
+    if !refused.is_empty() {
+        return (File::default(), refused);
     }
     match SkillParser::parse(Rule::file, &src.text) {
         Ok(mut pairs) => {
@@ -38,44 +42,6 @@ pub fn parse(src: &SourceFile, file: usize) -> (File, Vec<Diag>) {
         }
         Err(err) => (File::default(), vec![syntax_error(err, file, &src.text)]),
     }
-}
-
-/// Refuses nesting deeper than [`crate::MAX_NESTING`] so pest's recursion stays bounded.
-fn check_nesting(src: &SourceFile, file: usize) -> Option<Diag> {
-    let mut depth = 0usize;
-    let mut in_comment = false;
-    let mut in_string = false;
-    let bytes = src.text.as_bytes();
-    for (at, &byte) in bytes.iter().enumerate() {
-        match byte {
-            b'\n' => {
-                in_comment = false;
-                in_string = false;
-            }
-            _ if in_comment => {}
-            b'"' => in_string = !in_string,
-            _ if in_string => {}
-            b'/' if bytes.get(at + 1) == Some(&b'/') => in_comment = true,
-            b'(' | b'[' | b'{' => {
-                depth += 1;
-                if depth > crate::MAX_NESTING {
-                    return Some(
-                        Diag::new(
-                            Code::TooDeep,
-                            file,
-                            Span::new(at, at + 1),
-                            format!("brackets nested more than {} deep", crate::MAX_NESTING),
-                            "nesting exceeds the limit here",
-                        )
-                        .help("no template needs this depth; look for unbalanced brackets"),
-                    );
-                }
-            }
-            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
-            _ => {}
-        }
-    }
-    None
 }
 
 fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> Diag {
@@ -103,6 +69,13 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
         }
         pest::error::ErrorVariant::CustomError { message } => (message.clone(), String::new()),
     };
+    // `capture` and `move M at` followed by anything but a name (often the next statement, whose
+    // keyword would read as a name refused): say that the name is missing.
+    if label == "expected a name" {
+        if let Some(diag) = missing_name(src_text, span.start, file) {
+            return diag;
+        }
+    }
     // A reserved word where a name was expected reads as a puzzling "expected a name".
     let word: String = src_text
         .get(span.start..)
@@ -122,6 +95,45 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
         .help(format!("rename it, e.g. `{example}`"));
     }
     Diag::new(Code::Unexpected, file, span, message, label)
+}
+
+/// The word that ends right before `at` (whitespace between), and where it starts.
+fn word_before(src_text: &str, at: usize) -> (&str, usize) {
+    let before = src_text.get(..at).unwrap_or("").trim_end();
+    let start = before
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |found| found + 1);
+    (&before[start..], start)
+}
+
+/// A name missing after `capture` or after `at` in a `move` (the only `at` that takes nothing
+/// but a name), where the error at `at` expects a name.
+fn missing_name(src_text: &str, at: usize, file: usize) -> Option<Diag> {
+    let (word, start) = word_before(src_text, at);
+    let span = Span::new(start, start + word.len());
+    match word {
+        "capture" => Some(
+            Diag::new(
+                Code::Unexpected,
+                file,
+                span,
+                "`capture` needs a name for the pose it keeps",
+                "a name should follow `capture`",
+            )
+            .help("write e.g. `capture found`; a later state's `move M at found` ends there"),
+        ),
+        "at" => Some(
+            Diag::new(
+                Code::Unexpected,
+                file,
+                span,
+                "`move ... at` needs the name of a captured pose",
+                "a name should follow `at`",
+            )
+            .help("write e.g. `move back at found`, where a state the run passes first has `capture found`"),
+        ),
+        _ => None,
+    }
 }
 
 /// What the name at `at` would name, judged by the word before it (`state up`, `motion up =`,
@@ -368,6 +380,9 @@ fn named_value(pair: Pair<'_, Rule>, what: &str) -> (Vec<String>, Ident, Expr) {
 pub fn parse_param_setting(text: &str) -> Result<(Ident, Expr), String> {
     if text.len() > 1000 {
         return Err("a parameter setting is at most 1000 characters".to_string());
+    }
+    if let Some(refused) = prescan::prescan(text, 0).first() {
+        return Err(refused.message.clone());
     }
     let mut pairs = SkillParser::parse(Rule::param_setting, text)
         .map_err(|_| "expected `NAME=VALUE`, e.g. `--param hold=5s` or `--param strokes=6`".to_string())?;
@@ -962,5 +977,35 @@ mod tests {
         assert_eq!(help, "rename it, e.g. `up_state`");
         let (message, _) = keyword_diag("skill s { terminal from: success }");
         assert_eq!(message, "`from` is a keyword and cannot name a terminal state");
+    }
+
+    #[test]
+    fn a_capture_or_a_move_at_without_a_name_says_the_name_is_missing() {
+        let state = |body: &str| format!("skill s {{ state a {{ {body} }} terminal d: success }}");
+        for body in [
+            "capture\n control position all on timeout 1 s -> d",
+            "capture }",
+            "capture 5 mm on timeout 1 s -> d",
+        ] {
+            let (message, help) = keyword_diag(&state(body));
+            assert_eq!(message, "`capture` needs a name for the pose it keeps", "{body}");
+            assert!(help.contains("`capture found`"), "{help}");
+        }
+        for body in [
+            "move p at\n control position all on timeout 1 s -> d",
+            "move p relative at on motion_done -> d",
+            "move p at }",
+        ] {
+            let (message, _) = keyword_diag(&state(body));
+            assert_eq!(message, "`move ... at` needs the name of a captured pose", "{body}");
+        }
+        // Located at the word that wants the name.
+        let text = state("move p at\n control position all on timeout 1 s -> d");
+        let (_, diags) = parse(&SourceFile::new("t.skill", text.as_str()), 0);
+        let at = text.find(" at").expect("at") + 1;
+        assert_eq!(diags[0].span(), Span::new(at, at + 2));
+        // An `at` that takes a value is another error.
+        let (message, _) = keyword_diag(&state("move p approach within 1 cm at }"));
+        assert!(message.starts_with("syntax error"), "{message}");
     }
 }

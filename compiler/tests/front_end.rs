@@ -604,3 +604,64 @@ fn graphs_print_hold_times_on_their_edges() {
         assert!(drawn.contains("force(c.z) < t for 100 ms"), "{drawn}");
     }
 }
+
+#[test]
+fn a_byte_order_mark_is_dropped_and_positions_are_those_the_editor_shows() {
+    // `nope` is at column 26 of the first line as an editor shows it (the mark is hidden).
+    let text = "\u{feff}skill s { state a { move nope on motion_done -> d } terminal d: success }\n";
+    let compilation = skill_compiler::compile_str("bom.skill", text);
+    let diag = compilation.diags.first().expect("the unknown motion is reported");
+    assert_eq!(diag.code, Code::UnknownName);
+    let source = &compilation.files[0];
+    assert!(!source.text.starts_with('\u{feff}'), "the mark is not part of the text");
+    assert_eq!(source.slice(diag.span()), "nope");
+    assert_eq!(source.line_col(diag.span().start), (1, 26));
+    assert_eq!(
+        text.find("nope"),
+        Some(diag.span().start + '\u{feff}'.len_utf8()),
+        "offsets count from after the mark"
+    );
+    let rendered = skill_compiler::render::all_plain(&compilation, 80);
+    assert!(rendered.contains("bom.skill:1:26"), "{rendered}");
+    // Formatting writes the text without the mark.
+    let (ast, _) = skill_compiler::syntax::parse(source, 0);
+    assert!(skill_compiler::fmt::format(source, &ast).starts_with("skill s {"));
+}
+
+#[test]
+fn invalid_utf8_after_a_byte_order_mark_is_located_in_the_text_without_it() {
+    let mut bytes = "\u{feff}skill s {".as_bytes().to_vec();
+    bytes.push(0xff);
+    let Err(invalid) = skill_compiler::decode("bin.skill", bytes) else {
+        panic!("0xff is not UTF-8")
+    };
+    let (source, diag) = *invalid;
+    assert_eq!(diag.code, Code::InvalidUtf8);
+    assert_eq!(diag.span().start, "skill s {".len());
+    assert_eq!(source.line_col(diag.span().start), (1, 10));
+}
+
+#[test]
+fn a_nul_is_named_anywhere_and_a_utf16_file_is_recognised() {
+    let with_nul = with_state("move q on motion_done -> d // a\0b");
+    let compilation = skill_compiler::compile_str("nul.skill", &with_nul);
+    assert_eq!(
+        compilation.diags.iter().map(|d| d.code).collect::<Vec<_>>(),
+        [Code::UnexpectedCharacter]
+    );
+    let diag = &compilation.diags[0];
+    assert_eq!(diag.message, "U+0000 NUL is a zero byte, not text; delete it");
+    assert_eq!(compilation.files[0].slice(diag.span()), "\0");
+    // UTF-16 without a byte order mark is valid UTF-8 with a NUL after every ASCII letter.
+    let utf16: String = "skill s { }".chars().flat_map(|c| [c, '\0']).collect();
+    let compilation = skill_compiler::compile_str("utf16.skill", &utf16);
+    assert!(compilation.diags.len() <= 20, "a bounded number of diagnostics");
+    assert!(
+        compilation.diags[0]
+            .help
+            .as_deref()
+            .is_some_and(|help| help.contains("UTF-16")),
+        "{:?}",
+        compilation.diags[0]
+    );
+}

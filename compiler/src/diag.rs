@@ -176,6 +176,9 @@ codes! {
     /// `move back at found` in a state the run can reach from the initial state without passing
     /// through a state with `capture found`: the run fails there if it does.
     AtBeforeCapture => "skill::lint::at_before_capture", Warning;
+    /// `on timeout 0 s -> next` (or `dwell 0 s`, alone or in an `or`) in a state that moves or
+    /// force-controls an axis: the state is left at its entry, before its motion or force runs.
+    EndsOnEntry => "skill::lint::ends_on_entry", Warning;
 }
 
 impl fmt::Display for Code {

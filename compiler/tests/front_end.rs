@@ -665,3 +665,69 @@ fn a_nul_is_named_anywhere_and_a_utf16_file_is_recognised() {
         compilation.diags[0]
     );
 }
+
+#[test]
+fn a_hold_longer_than_a_later_timeout_is_refused_also_when_a_parameter_sets_it() {
+    let text = with_state("move q on force(c.z) < t for hold -> d on timeout 4 s -> d")
+        .replace("skill s {", "skill s { param hold = 2 s");
+    let compile = |params: &[&str]| {
+        let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
+        skill_compiler::compile_with_params(
+            skill_compiler::SourceFile::new("p.skill", text.as_str()),
+            &params,
+            &mut |_| {
+                Err(LoadError {
+                    reason: "no imports".to_string(),
+                })
+            },
+        )
+    };
+    assert_eq!(compile(&[]).diags, Vec::new());
+    let refused = compile(&["hold=5s"]);
+    assert_eq!(
+        refused.diags.iter().map(|d| d.code).collect::<Vec<_>>(),
+        [Code::NeverFires]
+    );
+    assert!(refused.program.is_none());
+    // Written the other way round, the hold after the timeout, it was refused already.
+    assert_eq!(
+        codes_of(&with_state("move q on force(c.z) < t for 5 s -> d on timeout 4 s -> d")),
+        [Code::NeverFires]
+    );
+    assert_eq!(
+        codes_of(&with_state("move q on force(c.z) < t for 4 s -> d on timeout 4 s -> d")),
+        Vec::<Code>::new(),
+        "a hold as long as the timeout fires if the force held from the entry"
+    );
+    // An `extend` before the timeout keeps the state, so the timeout may not come first.
+    assert_eq!(
+        codes_of(&with_state(
+            "move q on force(c.z) < t for 5 s -> d on motion_done -> extend along c.z at 1 cm/s, up to 1 cm, then d on timeout 4 s -> d"
+        )),
+        Vec::<Code>::new()
+    );
+}
+
+#[test]
+fn a_zero_timeout_warns_only_where_a_motion_or_force_would_be_cut() {
+    assert_eq!(
+        codes_of(&with_state("move q on motion_done -> d on timeout 0 s -> d")),
+        [Code::EndsOnEntry]
+    );
+    assert_eq!(
+        codes_of(&with_state("move q on motion_done or dwell 0 ms -> d")),
+        [Code::EndsOnEntry]
+    );
+    // A pass-through state, and a search started at once, are meant.
+    let pass_through = codes_of(&with_state("capture here on dwell 0 s -> d"));
+    assert!(
+        !pass_through.is_empty() && !pass_through.contains(&Code::EndsOnEntry),
+        "{pass_through:?}"
+    );
+    assert_eq!(
+        codes_of(&with_state(
+            "move q on force(c.z) >= t -> d on dwell 0 s -> extend along c.z at 1 cm/s, up to 1 cm, then d on timeout 5 s -> d"
+        )),
+        Vec::<Code>::new()
+    );
+}

@@ -362,6 +362,45 @@ impl Checker<'_> {
                     .label(later, "but this later transition leaves as soon as that guard holds")
                     .help("make the later guard stronger (hold it too, or add a condition), or remove one of the two transitions");
                 self.report(diag);
+                continue;
+            }
+            if let Some((later, earliest_s, leaves_s)) = left_before_it_can_hold(transitions, index) {
+                let diag = self
+                    .diag(
+                        Code::NeverFires,
+                        guard.span,
+                        "this transition can never fire",
+                        format!("holds {} after entry at the earliest", seconds(earliest_s)),
+                    )
+                    .label(later, format!("but this later transition leaves {} after entry", seconds(leaves_s)))
+                    .help(format!(
+                        "guards are tried in the order written: make the later guard wait at least {}, or this one at most {}",
+                        seconds(earliest_s),
+                        seconds(leaves_s)
+                    ));
+                self.report(diag);
+            }
+        }
+        if has_motion || has_force_axes {
+            let ends_on_entry = transitions.iter().find(|(transition, _, _)| {
+                matches!(transition.action, ir::TransitionAction::Goto { .. })
+                    && surely_holds_after(&transition.guard) == Some(0.0)
+            });
+            if let Some((_, guard, _)) = ends_on_entry {
+                let what = if has_motion { "its `move`" } else { "its force control" };
+                let diag = self
+                    .diag(
+                        Code::EndsOnEntry,
+                        guard.span,
+                        format!("state `{}` ends as soon as it is entered", state.name.name),
+                        "holds at entry",
+                    )
+                    .help(format!(
+                        "{what} never runs: give the guard a duration (`timeout 5 s`), or leave the state \
+                         without {}",
+                        if has_motion { "a `move`" } else { "`control force`" }
+                    ));
+                self.report(diag);
             }
         }
         let all_force_only = !transitions.is_empty()
@@ -468,6 +507,67 @@ fn left_before_held(transitions: &[(ir::Transition, &ast::Guard, Span)], index: 
                 .all(|(other, (t, _, _))| other == index || goto(t));
             if others_enter && goto(later) && implies(inner, &later.guard) {
                 return Some(later_guard.span);
+            }
+        }
+    }
+    None
+}
+
+/// How long after the entry a guard can first hold: a held guard (`G for D`), a `dwell` and a
+/// `timeout` wait from the entry, an `and` as long as its slowest part, an `or` as its quickest.
+fn earliest_after_entry(guard: &ir::Guard) -> f64 {
+    match guard {
+        ir::Guard::Dwell { duration_s } | ir::Guard::Timeout { duration_s } => *duration_s,
+        ir::Guard::Held {
+            guard: inner,
+            duration_s,
+        } => duration_s.max(earliest_after_entry(inner)),
+        ir::Guard::And { all } => all.iter().map(earliest_after_entry).fold(0.0, f64::max),
+        ir::Guard::Or { any } => any.iter().map(earliest_after_entry).fold(f64::INFINITY, f64::min),
+        // A negation holds from the entry if its guard does not; other atoms may hold at once.
+        _ => 0.0,
+    }
+}
+
+/// How long after the entry a guard surely holds, whatever the world does: a `dwell` or a
+/// `timeout`, an `or` with one, an `and` of them. `None` when it may never hold.
+fn surely_holds_after(guard: &ir::Guard) -> Option<f64> {
+    match guard {
+        ir::Guard::Dwell { duration_s } | ir::Guard::Timeout { duration_s } => Some(*duration_s),
+        ir::Guard::Or { any } => any.iter().filter_map(surely_holds_after).reduce(f64::min),
+        ir::Guard::And { all } => all
+            .iter()
+            .map(surely_holds_after)
+            .try_fold(0.0, |latest: f64, part| part.map(|part| latest.max(part))),
+        _ => None,
+    }
+}
+
+/// A later transition that leaves the state before transition `index` can first hold
+/// (`on G for 3 s -> a` before `on timeout 2 s -> b`: `b` is entered at 2 s, before `G` can have
+/// held 3 s), with how long after the entry `index` can first hold and the later one surely
+/// leaves. Only when every other transition before the later one enters a state: an `extend`
+/// that starts keeps the state and the later transitions unevaluated that tick.
+fn left_before_it_can_hold(
+    transitions: &[(ir::Transition, &ast::Guard, Span)],
+    index: usize,
+) -> Option<(Span, f64, f64)> {
+    let goto = |transition: &ir::Transition| matches!(transition.action, ir::TransitionAction::Goto { .. });
+    let earliest_s = earliest_after_entry(&transitions[index].0.guard);
+    if earliest_s <= 0.0 {
+        return None;
+    }
+    for (later_index, (later, later_guard, _)) in transitions.iter().enumerate().skip(index + 1) {
+        let others_enter = transitions[..later_index]
+            .iter()
+            .enumerate()
+            .all(|(other, (t, _, _))| other == index || goto(t));
+        if !others_enter {
+            return None;
+        }
+        if let Some(leaves_s) = surely_holds_after(&later.guard).filter(|leaves_s| *leaves_s < earliest_s) {
+            if goto(later) {
+                return Some((later_guard.span, earliest_s, leaves_s));
             }
         }
     }

@@ -35,6 +35,8 @@ pub(crate) struct SkillFacts<'s> {
     pub(crate) params: Vec<&'s str>,
     /// Its states' names (active and terminal).
     pub(crate) states: Vec<&'s str>,
+    /// Its terminal states' names.
+    pub(crate) terminals: Vec<&'s str>,
     /// Whether its first state runs a motion (`move`, not `relative`: that one starts where the
     /// tool is), whose goal `at:` places.
     pub(crate) first_moves: bool,
@@ -372,6 +374,34 @@ impl Checker<'_> {
                     .help(help);
                 self.report(diag);
                 ok = false;
+            } else if found_facts.terminals.contains(&state_name.name.as_str()) {
+                // A terminal is entered where the step ended, not where it found anything: the
+                // next step starts there anyway, and a pose found in a state before it is lost.
+                let active: Vec<&str> = found_facts
+                    .states
+                    .iter()
+                    .copied()
+                    .filter(|name| !found_facts.terminals.contains(name))
+                    .collect();
+                let diag = self
+                    .diag(
+                        Code::WrongKind,
+                        state_name.span,
+                        format!(
+                            "`{}` is a terminal state of `{}` (step `{}`): `at` takes a state the step runs",
+                            state_name.name, found.skill.name, found.name.name
+                        ),
+                        "a terminal state",
+                    )
+                    .help(format!(
+                        "a terminal is where step `{}` ended, where the next step starts anyway; name the state \
+                         entered where the pose was found (`{}`'s active states: {})",
+                        found.name.name,
+                        found.skill.name,
+                        join_ticked(&active)
+                    ));
+                self.report(diag);
+                ok = false;
             }
         }
         if let Some(own) = facts.get(step.skill.name.as_str()) {
@@ -425,6 +455,12 @@ impl<'s> SkillFacts<'s> {
         SkillFacts {
             params: skill.params.iter().map(|p| p.name.name.as_str()).collect(),
             states: skill.states.iter().map(|s| s.name.name.as_str()).collect(),
+            terminals: skill
+                .states
+                .iter()
+                .filter(|s| matches!(s.body, ast::StateBody::Terminal { .. }))
+                .map(|s| s.name.name.as_str())
+                .collect(),
             first_moves,
         }
     }

@@ -376,7 +376,7 @@ const REPORT_ENTRIES: &[&str] = &["summary.json", "index.html", "plots"];
 
 /// Writes a folder of outputs as a unit: `fill` writes into a fresh hidden folder beside `dir`,
 /// which then takes `dir`'s place (the module docs). An existing `dir` is replaced only when it
-/// is empty or holds nothing but what a report holds ([`REPORT_ENTRIES`]); otherwise the write
+/// is empty or holds nothing but what a report holds (`summary.json`, `index.html`, `plots`); otherwise the write
 /// is refused before `fill` runs. On any error the new folder is removed and `dir` is as it was.
 pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) -> std::io::Result<T> {
     let dir = resolve_links(dir)?;

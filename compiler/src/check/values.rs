@@ -380,11 +380,6 @@ pub(super) fn whole_number(text: &str) -> Option<u64> {
     if value.is_infinite() && value > 0.0 {
         return Some(u64::MAX);
     }
-    (value.is_finite() && value >= 0.0 && value.fract() == 0.0).then(|| {
-        if value >= u64::MAX as f64 {
-            u64::MAX
-        } else {
-            value as u64
-        }
-    })
+    // `as` saturates at u64::MAX.
+    (value.is_finite() && value >= 0.0 && value.fract() == 0.0).then_some(value as u64)
 }

@@ -439,6 +439,12 @@ fn fmt(files: &[PathBuf], check_only: bool, verbosity: Verbosity) -> u8 {
                 continue;
             }
         };
+        // The compiler reads past a byte order mark; the file keeps the one its editor wrote.
+        let mark = if bytes.starts_with("\u{feff}".as_bytes()) {
+            "\u{feff}"
+        } else {
+            ""
+        };
         let source = match frontend::decode(&name, bytes) {
             Ok(source) => source,
             Err(invalid) => {
@@ -467,8 +473,8 @@ fn fmt(files: &[PathBuf], check_only: bool, verbosity: Verbosity) -> u8 {
             status = status.max(1);
             continue;
         }
-        let formatted = skill_compiler::fmt::format(&source, &ast);
-        if formatted == *source.text {
+        let formatted = format!("{mark}{}", skill_compiler::fmt::format(&source, &ast));
+        if formatted.strip_prefix(mark) == Some(&*source.text) {
             verbosity.detail(format_args!("`{name}` is formatted"));
             continue;
         }

@@ -131,6 +131,53 @@ impl RunLog {
     }
 }
 
+/// Powers of ten a fixed-point column is scaled by.
+const POW10: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+
+/// Appends `value` with `precision` decimals, exactly as `format!("{value:.precision$}")` does,
+/// in a tenth of its time (the log's 60 columns a tick cost 7 µs through `write!`).
+///
+/// The value is scaled by 10^precision and rounded to an integer whose digits are written
+/// directly. The scaled product is exact to within an ulp, so the rounding agrees with the
+/// formatter's exact decimal rounding except when the product lies within that ulp of a half:
+/// those (about one value in 10^4), large values, and non-finite ones go through `write!`.
+fn push_fixed(out: &mut String, value: f64, precision: usize) {
+    let fallback = |out: &mut String| {
+        let _ = write!(out, "{value:.precision$}");
+    };
+    let Some(&scale) = POW10.get(precision) else {
+        return fallback(out);
+    };
+    let scaled = value.abs() * scale;
+    // Below 2^36 an ulp of `scaled` is at most 2^-16, far inside the guard band below.
+    if !(scaled < 68_719_476_736.0) {
+        return fallback(out);
+    }
+    let floor = scaled.floor();
+    if ((scaled - floor) - 0.5).abs() < 1e-4 {
+        return fallback(out);
+    }
+    let units = scaled.round() as u64;
+    // The formatter keeps the sign of a negative value that rounds to zero (`-0.0000`).
+    if value.is_sign_negative() {
+        out.push('-');
+    }
+    let mut digits = [0u8; 24];
+    let mut len = 0;
+    let mut rest = units;
+    while len <= precision || rest > 0 {
+        digits[len] = b'0' + (rest % 10) as u8;
+        rest /= 10;
+        len += 1;
+    }
+    for (i, digit) in digits[..len].iter().enumerate().rev() {
+        out.push(char::from(*digit));
+        if i == precision && precision > 0 {
+            out.push('.');
+        }
+    }
+}
+
 /// Consecutive logs as one CSV (a task's steps on one robot): each row's state is written
 /// `<step>/<state>` for a log given with a step name.
 pub(super) fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
@@ -154,30 +201,100 @@ pub(super) fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
     for (step, log) in logs {
         for tick in &log.ticks {
             let state = &log.states[tick.state as usize];
-            let _ = match step {
-                Some(step) => write!(out, "{:.4},{step}/{state}", tick.t_s),
-                None => write!(out, "{:.4},{state}", tick.t_s),
-            };
-            for value in tick.desired.iter().chain(&tick.measured) {
-                let _ = write!(out, ",{value:.6}");
+            push_fixed(&mut out, tick.t_s, 4);
+            out.push(',');
+            if let Some(step) = step {
+                out.push_str(step);
+                out.push('/');
             }
-            for value in tick.wrench_base.iter().chain(&tick.wrench_cf).chain(&tick.desired_cf) {
-                let _ = write!(out, ",{value:.4}");
-            }
-            for value in &tick.frame_z {
-                let _ = write!(out, ",{value:.5}");
+            out.push_str(state);
+            let columns = [
+                (&tick.desired[..], 6),
+                (&tick.measured[..], 6),
+                (&tick.wrench_base[..], 4),
+                (&tick.wrench_cf[..], 4),
+                (&tick.desired_cf[..], 4),
+                (&tick.frame_z[..], 5),
+            ];
+            for (values, precision) in columns {
+                for value in values {
+                    out.push(',');
+                    push_fixed(&mut out, *value, precision);
+                }
             }
             for bit in 0..6 {
-                let _ = write!(out, ",{}", if tick.selection & (1 << bit) != 0 { "P" } else { "F" });
+                out.push_str(if tick.selection & (1 << bit) != 0 { ",P" } else { ",F" });
             }
             for value in &tick.torques {
-                let _ = write!(out, ",{value:.4}");
+                out.push(',');
+                push_fixed(&mut out, *value, 4);
             }
             for value in &tick.joint_state {
-                let _ = write!(out, ",{value:.6}");
+                out.push(',');
+                push_fixed(&mut out, *value, 6);
             }
             out.push('\n');
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::push_fixed;
+
+    fn fixed(value: f64, precision: usize) -> String {
+        let mut out = String::new();
+        push_fixed(&mut out, value, precision);
+        out
+    }
+
+    #[test]
+    fn fixed_point_columns_match_the_formatter_exactly() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut cases = vec![
+            0.0,
+            -0.0,
+            -0.00001,
+            0.00005,
+            0.5,
+            -0.5,
+            1.5,
+            2.5,
+            0.125,
+            0.0625,
+            123_456.789,
+            1e9,
+            -7e10,
+            1e300,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+        ];
+        for _ in 0..400_000 {
+            let bits = next();
+            // Values like a log's (|v| up to a few hundred), and halves at every precision.
+            let magnitude = 10f64.powi((bits % 9) as i32 - 5);
+            let unit = (next() >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            cases.push(unit * 2.0 * magnitude * 300.0);
+            let precision = (bits % 7) as i32;
+            cases.push(((next() % 2_000_000) as f64 - 1e6 + 0.5) / 10f64.powi(precision));
+        }
+        for value in cases {
+            for precision in [0, 3, 4, 5, 6] {
+                assert_eq!(
+                    fixed(value, precision),
+                    format!("{value:.precision$}"),
+                    "{value:e} at {precision}"
+                );
+            }
+        }
+    }
 }

@@ -8,7 +8,7 @@ use skill_ir as ir;
 use super::bind::BoundSkill;
 use super::limits::{limits_for, reflex_message};
 use super::log::RunLog;
-use super::machine::{Machine, Sensed};
+use super::machine::{LostContact, Machine, Sensed};
 use super::motion::{motion_start, motions_in_order, MotionRollout};
 use super::rig::Rig;
 use crate::control::Command;
@@ -408,6 +408,19 @@ fn skill_loop(
             }
             continue;
         }
+        if let Some(lost) = machine.lost_contact(active, &sensed, rig, t) {
+            let last = visits.last_mut().expect("a visit per state");
+            last.exit_s = t - start_s;
+            return Ok(RunReport {
+                outcome: ir::Outcome::Failure,
+                terminal: None,
+                message: lost_contact_message(&lost, &state.name, &location(&state.span), start_s),
+                visits: std::mem::take(visits),
+                duration_s: t - start_s,
+                reflex: None,
+                safety: SafetyStats::default(),
+            });
+        }
 
         machine.advance(dt, &sensed)?;
         let cmd = machine.command(active, rig, t);
@@ -416,6 +429,35 @@ fn skill_loop(
         rig.sense();
         last_cmd = Some(cmd);
     }
+}
+
+/// The failure message of a contact lost mid-stroke (docs/method.md §7): it starts with
+/// `lost_contact`, then when (run time, as the report's visits count it), the state and its
+/// `.skill` line, where the tool was and how much of the stroke was left.
+fn lost_contact_message(lost: &LostContact, state: &str, location: &str, start_s: f64) -> String {
+    let (at, now) = (lost.lost_at_m, lost.tool_m);
+    let left = match lost.runs_left {
+        0 => format!("{:.1} mm of its stroke left", lost.stroke_left_m * 1e3),
+        n => format!(
+            "{:.1} mm of this stroke and {n} more run(s) left",
+            lost.stroke_left_m * 1e3
+        ),
+    };
+    format!(
+        "lost_contact: the contact was lost at t = {:.3} s in state `{state}` ({location}), the tool at \
+         ({:.3}, {:.3}, {:.3}) m with {left}: the force along the desired {:.1} N stayed below half of it \
+         for {:.0} ms (now {:.1} N, the tool at ({:.3}, {:.3}, {:.3}) m)",
+        lost.since_s - start_s,
+        at.x,
+        at.y,
+        at.z,
+        lost.desired_n,
+        (lost.t_s - lost.since_s) * 1e3,
+        lost.applied_n,
+        now.x,
+        now.y,
+        now.z,
+    )
 }
 
 /// The thesis's baseline: the demonstration replayed under pure impedance control, with no

@@ -13,6 +13,7 @@ pub mod diag;
 pub mod fmt;
 pub mod graph;
 mod import;
+pub mod info;
 pub mod render;
 pub mod source;
 pub mod syntax;

@@ -34,6 +34,7 @@ use skill_ir as ir;
 
 pub use learn::{DEFAULT_FORCE_BASIS, DEFAULT_MOTION_BASIS};
 pub use params::ParamSetting;
+pub(crate) use signatures::public_table as learn_function_table;
 pub use states::{DEFAULT_GAINS, DEFAULT_STIFFNESS};
 pub(crate) use task::SkillFacts;
 

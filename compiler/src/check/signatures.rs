@@ -184,6 +184,61 @@ impl Signature {
     }
 }
 
+impl Signature {
+    /// What the function learns, in one line: the meaning column of docs/language.md's `learn`
+    /// table, for tools (the language server's hover). The match is exhaustive, so a new
+    /// function cannot be added without one.
+    pub(super) fn meaning(&self) -> &'static str {
+        match (self.function, self.produces) {
+            (F::NoSegments, _) => "the whole demonstration as one segment",
+            (F::MaxForce, _) => "two segments split at the force peak (touch)",
+            (F::Cluster, _) => "agglomerative clustering of standardised features (position, force, force_magnitude)",
+            (F::Changepoint, _) => "CHAMP-style change-point detection; `expect N` is required because the method does not fix the count",
+            (F::Count, _) => "cut the cluster tree into N segments",
+            (F::Distance, _) => "cut the cluster tree at a linkage distance",
+            (F::PeakForce, _) => "the sample of largest force, in the demonstration or within one segment",
+            (F::End, _) => "the last sample of a segment",
+            (F::Start, _) => "the first sample of a segment",
+            (F::Model(_), _) => "one of the six constraint models fitted on a segment",
+            (F::Constraint, _) => "fit the candidate constraint models (default all six) and keep the best",
+            (F::ForceAligned, _) => "a frame with z along the applied force without its component along the motion (friction): per sample over a segment, or one frame at a point",
+            (F::Fixed, _) => "a literal frame in the base frame",
+            (F::Dmp, P::Force) => "DMPs of the applied force vector (base frame)",
+            (F::Dmp, _) => "position DMP and quaternion DMP of a segment",
+            (F::Strokes, _) => "the segment cut into strokes where its main direction of travel reverses, a DMP pair per stroke",
+            (F::Constant, _) => "a constant force from the lowest-variance in-contact region of a segment",
+            (F::ForceAt, P::Threshold) => "a learned scalar threshold: the force at a point along an axis, scaled",
+            (F::ForceAt, _) => "the force at a point along an axis",
+            (F::Magnitude, _) => "the applied force along a (moving) frame axis, as a DMP",
+            (F::Tracked, _) => "no desired force: force-controlled axes comply, guards watch",
+        }
+    }
+}
+
+/// A read-only view of one entry of [`LEARN_FUNCTIONS`], for tools outside the checker.
+pub(crate) fn public_table() -> Vec<crate::info::LearnFunction> {
+    LEARN_FUNCTIONS
+        .iter()
+        .map(|sig| crate::info::LearnFunction {
+            name: sig.name,
+            kind: match sig.produces {
+                P::Segmentation => "segments",
+                P::Cut => "cut",
+                P::Point => "point",
+                P::Frame => "frame",
+                P::Motion => "motion",
+                P::Force => "force",
+                P::Threshold => "threshold",
+            },
+            params: sig.params,
+            positional: sig.positional,
+            example: sig.example,
+            aliases: sig.aliases,
+            meaning: sig.meaning(),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -162,6 +162,10 @@ pub enum Command {
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
     },
+    /// Run the language server on standard input and output, for editors (docs/editors.md).
+    #[command(after_help = "Examples:
+  skillc lsp                        # started by the editor, which talks to it over stdio")]
+    Lsp,
 }
 
 /// Diagnostic output formats.
@@ -212,6 +216,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Robot(args) => crate::robot_cmd::run(&args),
         Command::Completions { shell } => completions(shell),
         Command::Man { out } => man(out.as_deref(), verbosity),
+        Command::Lsp => crate::lsp::run_stdio(),
     };
     ExitCode::from(code)
 }

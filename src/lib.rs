@@ -10,6 +10,7 @@ pub mod frontend;
 pub mod learn_cmd;
 pub mod limits;
 pub mod load;
+pub mod lsp;
 pub mod out;
 pub mod plot;
 pub mod profile;

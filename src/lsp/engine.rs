@@ -1,0 +1,453 @@
+//! The language server's engine, without the protocol: the open documents, and for each
+//! request the compilation of a document (the one `skillc check` makes), its symbol index and
+//! the answer in the protocol's types. Pure but for reading imports that are not open from
+//! disk, which [`Engine::in_memory`] switches off for tests.
+
+use super::complete;
+use super::index::{Index, Kind, What};
+use super::text::{name_to_uri, Encoding, LineIndex};
+use lsp_types::{
+    DiagnosticRelatedInformation, DiagnosticSeverity, DocumentSymbol, Hover, HoverContents, Location, MarkupContent,
+    MarkupKind, NumberOrString, Position, Range, SymbolKind, TextEdit, Uri, WorkspaceEdit,
+};
+use skill_compiler::{ast, Compilation, LoadError, Severity, SourceFile};
+use std::collections::{BTreeMap, HashMap};
+use std::str::FromStr;
+
+/// The open documents and how to answer questions about them.
+#[derive(Debug)]
+pub struct Engine {
+    /// Open documents by file name (a path for `file:` URIs), with their text.
+    docs: BTreeMap<String, String>,
+    /// Whether imports that are not open are read from disk.
+    read_disk: bool,
+    /// How positions count characters.
+    pub encoding: Encoding,
+}
+
+/// A compiled document: the compilation, the syntax tree of every file and the index.
+#[derive(Debug)]
+pub struct Analysis {
+    /// What `skillc check` computes for the document.
+    pub compilation: Compilation,
+    /// The syntax tree of every file of the compilation (empty for one that did not parse).
+    pub asts: Vec<ast::File>,
+    /// Declarations and uses.
+    pub index: Index,
+    lines: Vec<LineIndex>,
+}
+
+impl Analysis {
+    /// The protocol range of a span in file `file`.
+    pub fn range(&self, file: usize, span: skill_compiler::Span) -> Range {
+        self.lines[file].range(&self.compilation.files[file].text, span)
+    }
+
+    /// The byte offset of a position in file `file`.
+    pub fn offset(&self, file: usize, position: Position) -> usize {
+        self.lines[file].offset(&self.compilation.files[file].text, position)
+    }
+
+    /// The location of a span.
+    pub fn location(&self, file: usize, span: skill_compiler::Span) -> Option<Location> {
+        Some(Location::new(
+            uri(&self.compilation.files[file].name)?,
+            self.range(file, span),
+        ))
+    }
+}
+
+/// The URI of a file name.
+pub fn uri(name: &str) -> Option<Uri> {
+    Uri::from_str(&name_to_uri(name)).ok()
+}
+
+/// Words a declared name cannot be renamed to: the grammar's keywords.
+pub const KEYWORDS: &[&str] = &[
+    "skill",
+    "state",
+    "learn",
+    "terminal",
+    "task",
+    "step",
+    "fallback",
+    "import",
+    "on",
+    "in",
+    "and",
+    "or",
+    "not",
+    "then",
+    "at",
+    "up",
+    "to",
+    "along",
+    "expect",
+    "from",
+    "within",
+    "control",
+    "move",
+    "apply",
+    "stiffness",
+    "gains",
+    "entry",
+    "extend",
+    "segment",
+    "all",
+];
+
+impl Default for Engine {
+    fn default() -> Self {
+        Engine::new()
+    }
+}
+
+impl Engine {
+    /// An engine that reads imports from disk when they are not open.
+    pub fn new() -> Self {
+        Engine {
+            docs: BTreeMap::new(),
+            read_disk: true,
+            encoding: Encoding::Utf16,
+        }
+    }
+
+    /// An engine that sees only the documents opened in it.
+    pub fn in_memory() -> Self {
+        Engine {
+            read_disk: false,
+            ..Engine::new()
+        }
+    }
+
+    /// Opens (or replaces) a document.
+    pub fn open(&mut self, name: &str, text: &str) {
+        self.docs.insert(name.to_string(), text.to_string());
+    }
+
+    /// Closes a document.
+    pub fn close(&mut self, name: &str) {
+        self.docs.remove(name);
+    }
+
+    /// The names of the open documents.
+    pub fn open_names(&self) -> Vec<String> {
+        self.docs.keys().cloned().collect()
+    }
+
+    /// The text of an open document.
+    pub fn text(&self, name: &str) -> Option<&str> {
+        self.docs.get(name).map(String::as_str)
+    }
+
+    /// Compiles an open document, reading its imports from the open documents or disk.
+    pub fn analyse(&self, name: &str) -> Option<Analysis> {
+        let text = self.docs.get(name)?;
+        let mut load = |path: &str| -> Result<String, LoadError> {
+            if let Some(open) = self.docs.get(path) {
+                return Ok(open.clone());
+            }
+            if !self.read_disk {
+                return Err(LoadError {
+                    reason: "no such file".to_string(),
+                });
+            }
+            // As `skillc check` reads them (src/frontend.rs), so that messages are the same.
+            let bytes = std::fs::read(path).map_err(|err| LoadError {
+                reason: err.to_string().to_lowercase(),
+            })?;
+            String::from_utf8(bytes).map_err(|_| LoadError {
+                reason: "not valid UTF-8 text".to_string(),
+            })
+        };
+        let compilation = skill_compiler::compile_bytes(name, text.as_bytes().to_vec(), &[], &mut load);
+        let mut asts = Vec::with_capacity(compilation.files.len());
+        for (file, source) in compilation.files.iter().enumerate() {
+            if file == 0 {
+                asts.push(compilation.ast.clone());
+            } else if source.name == skill_compiler::PARAM_FILE {
+                asts.push(ast::File::default());
+            } else {
+                asts.push(skill_compiler::syntax::parse(source, file).0);
+            }
+        }
+        let index = Index::build(&compilation.files, &asts);
+        let lines = compilation
+            .files
+            .iter()
+            .map(|f| LineIndex::new(&f.text, self.encoding))
+            .collect();
+        Some(Analysis {
+            compilation,
+            asts,
+            index,
+            lines,
+        })
+    }
+
+    /// The diagnostics of a document's compilation, by the file they are in (the document
+    /// first, then imports with problems): what `skillc check` prints for it.
+    pub fn diagnostics(&self, name: &str) -> Vec<(String, Vec<lsp_types::Diagnostic>)> {
+        let Some(analysis) = self.analyse(name) else {
+            return Vec::new();
+        };
+        let mut by_file: BTreeMap<usize, Vec<lsp_types::Diagnostic>> = BTreeMap::new();
+        by_file.insert(0, Vec::new());
+        for diag in &analysis.compilation.diags {
+            by_file.entry(diag.file).or_default().push(to_lsp(diag, &analysis));
+        }
+        by_file
+            .into_iter()
+            .map(|(file, diags)| (analysis.compilation.files[file].name.clone(), diags))
+            .collect()
+    }
+
+    /// What the name at a position is.
+    pub fn hover(&self, name: &str, position: Position) -> Option<Hover> {
+        let analysis = self.analyse(name)?;
+        let offset = analysis.offset(0, position);
+        let occurrence = analysis.index.at(0, offset)?;
+        let text = super::hover::describe(&analysis, occurrence)?;
+        Some(Hover {
+            contents: HoverContents::Markup(MarkupContent {
+                kind: MarkupKind::Markdown,
+                value: text,
+            }),
+            range: Some(analysis.range(0, occurrence.span)),
+        })
+    }
+
+    /// Where the name at a position is declared.
+    pub fn definition(&self, name: &str, position: Position) -> Option<Location> {
+        let analysis = self.analyse(name)?;
+        let offset = analysis.offset(0, position);
+        match &analysis.index.at(0, offset)?.what {
+            What::Def(id) => {
+                let def = &analysis.index.defs[*id];
+                analysis.location(def.file, def.span)
+            }
+            What::Import(Some(file)) => analysis.location(*file, skill_compiler::Span::new(0, 0)),
+            _ => None,
+        }
+    }
+
+    /// Every use of the name at a position, with its declaration when `declaration` is set.
+    pub fn references(&self, name: &str, position: Position, declaration: bool) -> Vec<Location> {
+        let Some(analysis) = self.analyse(name) else {
+            return Vec::new();
+        };
+        let offset = analysis.offset(0, position);
+        let Some(What::Def(id)) = analysis.index.at(0, offset).map(|o| o.what.clone()) else {
+            return Vec::new();
+        };
+        let def = &analysis.index.defs[id];
+        analysis
+            .index
+            .uses(id)
+            .into_iter()
+            .filter(|o| declaration || !(o.file == def.file && o.span == def.span))
+            .filter_map(|o| analysis.location(o.file, o.span))
+            .collect()
+    }
+
+    /// The range of the declared name at a position, if it can be renamed.
+    pub fn prepare_rename(&self, name: &str, position: Position) -> Option<Range> {
+        let analysis = self.analyse(name)?;
+        let offset = analysis.offset(0, position);
+        let occurrence = analysis.index.at(0, offset)?;
+        matches!(occurrence.what, What::Def(_)).then(|| analysis.range(0, occurrence.span))
+    }
+
+    /// The edits that rename the declared name at a position, everywhere it is used.
+    pub fn rename(&self, name: &str, position: Position, new_name: &str) -> Result<WorkspaceEdit, String> {
+        let valid = new_name
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && new_name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid {
+            return Err(format!(
+                "`{new_name}` is not a name: a letter or `_`, then letters, digits or `_`"
+            ));
+        }
+        if KEYWORDS.contains(&new_name) {
+            return Err(format!("`{new_name}` is a keyword"));
+        }
+        let analysis = self.analyse(name).ok_or("the document is not open")?;
+        let offset = analysis.offset(0, position);
+        let Some(What::Def(id)) = analysis.index.at(0, offset).map(|o| o.what.clone()) else {
+            return Err("there is no declared name here".to_string());
+        };
+        let def = &analysis.index.defs[id];
+        if def.name == new_name {
+            return Ok(WorkspaceEdit::default());
+        }
+        if let Some(clash) = analysis.index.lookup(def.parent, new_name, &[def.kind]) {
+            let clash = &analysis.index.defs[clash];
+            let scope_of = |kind| {
+                matches!(
+                    kind,
+                    Kind::Param | Kind::Capture | Kind::Frame | Kind::Motion | Kind::Force | Kind::Threshold
+                )
+            };
+            let same_namespace = clash.kind == def.kind
+                || (scope_of(clash.kind) && scope_of(def.kind))
+                || matches!(
+                    (clash.kind, def.kind),
+                    (Kind::State | Kind::Terminal, Kind::State | Kind::Terminal)
+                );
+            if same_namespace {
+                return Err(format!(
+                    "`{new_name}` is already declared here ({} `{new_name}`)",
+                    clash.kind.word()
+                ));
+            }
+        }
+        let mut changes: HashMap<Uri, Vec<TextEdit>> = HashMap::new();
+        for occurrence in analysis.index.uses(id) {
+            let Some(location) = analysis.location(occurrence.file, occurrence.span) else {
+                continue;
+            };
+            changes
+                .entry(location.uri)
+                .or_default()
+                .push(TextEdit::new(location.range, new_name.to_string()));
+        }
+        Ok(WorkspaceEdit::new(changes))
+    }
+
+    /// `skillc fmt`'s result as one edit of the whole document; no edit when it is formatted,
+    /// `None` when it does not parse (as `skillc fmt` leaves such a file alone).
+    pub fn format(&self, name: &str) -> Option<Vec<TextEdit>> {
+        let text = self.docs.get(name)?;
+        let source = SourceFile::new(name, text.as_str());
+        let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
+        if !diags.is_empty() {
+            return None;
+        }
+        let formatted = skill_compiler::fmt::format(&source, &ast);
+        if formatted == *source.text {
+            return Some(Vec::new());
+        }
+        let lines = LineIndex::new(text, self.encoding);
+        let end = lines.position(text, text.len());
+        Some(vec![TextEdit::new(Range::new(Position::new(0, 0), end), formatted)])
+    }
+
+    /// The skills, tasks and their parts a document declares.
+    pub fn symbols(&self, name: &str) -> Vec<DocumentSymbol> {
+        let Some(analysis) = self.analyse(name) else {
+            return Vec::new();
+        };
+        let index = &analysis.index;
+        let symbol = |id: usize, children: Option<Vec<DocumentSymbol>>| {
+            let def = &index.defs[id];
+            let kind = match def.kind {
+                Kind::Skill => SymbolKind::CLASS,
+                Kind::Task => SymbolKind::MODULE,
+                Kind::Step => SymbolKind::FUNCTION,
+                Kind::Param => SymbolKind::CONSTANT,
+                Kind::Frame => SymbolKind::STRUCT,
+                Kind::Motion => SymbolKind::METHOD,
+                Kind::Force | Kind::Threshold => SymbolKind::FIELD,
+                Kind::State => SymbolKind::ENUM_MEMBER,
+                Kind::Terminal => SymbolKind::EVENT,
+                Kind::Capture => SymbolKind::VARIABLE,
+            };
+            #[allow(deprecated)] // `deprecated` is a required field of the struct.
+            DocumentSymbol {
+                name: def.name.clone(),
+                detail: Some(def.detail.clone()),
+                kind,
+                tags: None,
+                deprecated: None,
+                range: analysis.range(def.file, def.full),
+                selection_range: analysis.range(def.file, def.span),
+                children,
+            }
+        };
+        index
+            .defs
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d.file == 0 && d.parent.is_none())
+            .map(|(id, _)| {
+                let children = index
+                    .defs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, d)| d.parent == Some(id))
+                    .map(|(child, _)| symbol(child, None))
+                    .collect();
+                symbol(id, Some(children))
+            })
+            .collect()
+    }
+
+    /// What may be written at a position.
+    pub fn completion(&self, name: &str, position: Position) -> Vec<lsp_types::CompletionItem> {
+        let Some(text) = self.docs.get(name) else {
+            return Vec::new();
+        };
+        let lines = LineIndex::new(text, self.encoding);
+        let offset = lines.offset(text, position);
+        let mut analysis = self.analyse(name);
+        let parse_failed = analysis.as_ref().is_some_and(|a| {
+            a.compilation
+                .diags
+                .iter()
+                .any(|d| d.file == 0 && d.code.as_str().starts_with("skill::syntax::"))
+        });
+        if parse_failed {
+            // A line being typed rarely parses: the names come from the file without it.
+            let start = text[..offset].rfind('\n').map_or(0, |at| at + 1);
+            let end = text[offset..].find('\n').map_or(text.len(), |at| offset + at);
+            let mut without = text.clone();
+            without.replace_range(start..end, &" ".repeat(end - start));
+            let mut scratch = Engine {
+                docs: self.docs.clone(),
+                read_disk: self.read_disk,
+                encoding: self.encoding,
+            };
+            scratch.open(name, &without);
+            analysis = scratch.analyse(name);
+        }
+        complete::complete(text, offset, analysis.as_ref())
+    }
+}
+
+/// A compiler diagnostic in the protocol's terms: its primary label's range, severity, code
+/// and message (with its help line), and the other labels as related information.
+fn to_lsp(diag: &skill_compiler::Diag, analysis: &Analysis) -> lsp_types::Diagnostic {
+    let file = diag.file;
+    let mut message = diag.message.clone();
+    if let Some(help) = &diag.help {
+        message.push_str("\nhelp: ");
+        message.push_str(help);
+    }
+    let related: Vec<DiagnosticRelatedInformation> = diag
+        .labels
+        .iter()
+        .skip(1)
+        .filter_map(|label| {
+            Some(DiagnosticRelatedInformation {
+                location: analysis.location(file, label.span)?,
+                message: label.text.clone(),
+            })
+        })
+        .collect();
+    lsp_types::Diagnostic {
+        range: analysis.range(file, diag.span()),
+        severity: Some(match diag.severity() {
+            Severity::Error => DiagnosticSeverity::ERROR,
+            Severity::Warning => DiagnosticSeverity::WARNING,
+        }),
+        code: Some(NumberOrString::String(diag.code.as_str().to_string())),
+        code_description: None,
+        source: Some("skillc".to_string()),
+        message,
+        related_information: (!related.is_empty()).then_some(related),
+        tags: None,
+        data: None,
+    }
+}

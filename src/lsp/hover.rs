@@ -22,7 +22,7 @@ pub fn describe(analysis: &Analysis, occurrence: &Occurrence) -> Option<String> 
                     );
                 }
                 Kind::Frame | Kind::Motion | Kind::Force | Kind::Threshold => {
-                    let _ = writeln!(out, "\nLearned {} (from the demonstration).", def.kind.word());
+                    let _ = writeln!(out, "\nA {} of the `learn` block.", def.kind.word());
                 }
                 Kind::Capture => {
                     let _ = writeln!(

@@ -69,8 +69,9 @@ pub fn serve(connection: Connection) -> u8 {
         }),
     };
     let result = serde_json::to_value(result).unwrap_or_default();
-    if let Err(err) = connection.initialize_finish(id, result) {
-        eprintln!("skillc lsp: {err}");
+    // Not `initialize_finish`: it insists that the next message be `initialized` and blocks
+    // until one comes; the loop below takes `initialized` as any other notification.
+    if connection.sender.send(Response::new_ok(id, result).into()).is_err() {
         return 1;
     }
     let mut server = Server {

@@ -192,9 +192,11 @@ fn rename_edits_every_use_and_refuses_keywords() {
     let edit = engine
         .rename(ROOT, pos("-> settle", 0, 4), "rest")
         .expect("a state renames");
-    let changes = edit.changes.expect("edits");
-    let mut lines: Vec<String> = changes
+    assert!(edit.changes.is_some(), "edits");
+    let mut lines: Vec<String> = edit
+        .changes
         .iter()
+        .flatten()
         .flat_map(|(uri, edits)| {
             edits
                 .iter()

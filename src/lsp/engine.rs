@@ -259,6 +259,9 @@ impl Engine {
     }
 
     /// The edits that rename the declared name at a position, everywhere it is used.
+    // lsp-types keys `WorkspaceEdit::changes` by `Uri`, which caches a parse in a `Cell`; the
+    // keys here are built once and never changed.
+    #[allow(clippy::mutable_key_type)]
     pub fn rename(&self, name: &str, position: Position, new_name: &str) -> Result<WorkspaceEdit, String> {
         let valid = new_name
             .chars()

@@ -69,7 +69,7 @@ pub fn describe(analysis: &Analysis, occurrence: &Occurrence) -> Option<String> 
                 .enumerate()
                 .map(|(at, param)| {
                     if at < function.positional {
-                        format!("{param}")
+                        param.to_string()
                     } else {
                         format!("{param}: …")
                     }

@@ -106,7 +106,8 @@ pub fn name_to_uri(name: &str) -> String {
         return name.to_string();
     }
     let mut path = name.to_string();
-    if !path.starts_with('/') && !path.as_bytes().get(1).is_some_and(|&b| b == b':') {
+    let drive = path.as_bytes().get(1) == Some(&b':');
+    if !path.starts_with('/') && !drive {
         if let Ok(dir) = std::env::current_dir() {
             let dir = dir.to_string_lossy().replace('\\', "/");
             path = format!("{}/{}", dir.trim_end_matches('/'), path.trim_start_matches("./"));

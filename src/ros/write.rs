@@ -53,6 +53,9 @@ impl Bag {
         let mut writer = mcap::WriteOptions::new()
             .profile("ros2")
             .compression(Some(mcap::Compression::Zstd))
+            // zstd level 1: 12 % fewer instructions for writing a run log than the default
+            // level 3, and no larger a file (slide: 4.96 MB against 5.00 MB).
+            .compression_level(1)
             .create(Cursor::new(Vec::new()))
             .map_err(BagError::Write)?;
         let mut ids = BTreeMap::new();

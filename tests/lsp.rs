@@ -376,6 +376,11 @@ fn nothing_panics_on_any_position_of_any_shipped_or_broken_file() {
             texts.push(std::fs::read_to_string(entry.expect("entry").path()).expect("text"));
         }
     }
+    // Files cut anywhere, as while typing: every one a prefix of the probe.
+    let boundaries: Vec<usize> = (0..PROBE.len()).filter(|&at| PROBE.is_char_boundary(at)).collect();
+    for at in boundaries.iter().step_by(boundaries.len() / 25) {
+        texts.push(PROBE[..*at].to_string());
+    }
     let mut answered = 0;
     for text in &texts {
         let mut engine = Engine::in_memory();
@@ -764,4 +769,43 @@ fn the_binary_ends_on_a_malformed_message_instead_of_hanging() {
     };
     assert!(!status.success(), "{status:?}");
     drop(stdin);
+}
+
+#[test]
+fn references_and_rename_reach_the_open_documents_that_import_a_skill() {
+    let engine = engine(Encoding::Utf16);
+    let lib = lib_text();
+    let position = at(&lib, "skill tap", 0, 7, Encoding::Utf16);
+    let found: Vec<String> = engine.references(LIB, position, true).iter().map(show).collect();
+    assert_eq!(
+        found,
+        [
+            "lib.skill:7:6-7:9",
+            "probe.skill:42:18-42:21",
+            "probe.skill:43:22-43:25"
+        ],
+        "the declaration and the two steps of the task that imports it"
+    );
+    let without: Vec<String> = engine.references(LIB, position, false).iter().map(show).collect();
+    assert_eq!(without.len(), 2, "{without:?}");
+    let edit = engine.rename(LIB, position, "tap_once").expect("renames");
+    let files: Vec<String> = edit
+        .changes
+        .iter()
+        .flatten()
+        .map(|(uri, edits)| format!("{} {}", uri.as_str(), edits.len()))
+        .collect();
+    assert_eq!(files.len(), 2, "{files:?}");
+    assert!(files.contains(&"file:///mem/probe.skill 2".to_string()), "{files:?}");
+}
+
+#[test]
+fn completion_of_an_axis_frame_in_learn() {
+    let mut engine = engine(Encoding::Utf16);
+    let typed = PROBE.replace("threshold touch = 2 N", "force press = constant(segment 2, along: ");
+    engine.open(ROOT, &typed);
+    let offset = typed.find("along: ").expect("typed") + "along: ".len();
+    let position = LineIndex::new(&typed, Encoding::Utf16).position(&typed, offset);
+    let labels: Vec<String> = engine.completion(ROOT, position).into_iter().map(|i| i.label).collect();
+    assert_eq!(labels, ["contact", "base", "tool"]);
 }

@@ -68,7 +68,12 @@ pub fn complete(text: &str, offset: usize, analysis: Option<&Analysis>) -> Vec<C
         ));
         return items;
     }
-    if before.ends_with("force(") || before.ends_with("moved(") || ends_with_word("in") || ends_with_word("along") {
+    if before.ends_with("force(")
+        || before.ends_with("moved(")
+        || before.ends_with("along:")
+        || ends_with_word("in")
+        || ends_with_word("along")
+    {
         let mut items = scope.names(&[Kind::Frame]);
         for (name, doc) in [("base", "the robot base frame"), ("tool", "the tool frame")] {
             items.push(item(name, CompletionItemKind::STRUCT, "built-in frame", doc));

@@ -241,13 +241,57 @@ impl Engine {
             return Vec::new();
         };
         let def = &analysis.index.defs[id];
-        analysis
+        let declared_at = (analysis.compilation.files[def.file].name.clone(), def.span);
+        self.uses_everywhere(&analysis, id)
+            .into_iter()
+            .filter(|(file, span)| declaration || (file, span) != (&declared_at.0, &declared_at.1))
+            .filter_map(|(file, span)| self.location_in(&analysis, &file, span))
+            .collect()
+    }
+
+    /// Every use of declaration `id` of `analysis`, in its compilation and in every other open
+    /// document whose compilation reads the file it is declared in (a task that imports the
+    /// skill being edited): (file name, span) pairs, the declaration among them.
+    fn uses_everywhere(&self, analysis: &Analysis, id: usize) -> Vec<(String, skill_compiler::Span)> {
+        let def = &analysis.index.defs[id];
+        let def_file = analysis.compilation.files[def.file].name.clone();
+        let mut found: Vec<(String, skill_compiler::Span)> = analysis
             .index
             .uses(id)
             .into_iter()
-            .filter(|o| declaration || !(o.file == def.file && o.span == def.span))
-            .filter_map(|o| analysis.location(o.file, o.span))
-            .collect()
+            .map(|o| (analysis.compilation.files[o.file].name.clone(), o.span))
+            .collect();
+        let root = &analysis.compilation.files[0].name;
+        for other in self.docs.keys().filter(|name| *name != root) {
+            let Some(elsewhere) = self.analyse(other) else { continue };
+            let same = elsewhere.index.defs.iter().position(|d| {
+                d.span == def.span && d.kind == def.kind && elsewhere.compilation.files[d.file].name == def_file
+            });
+            if let Some(same) = same {
+                for o in elsewhere.index.uses(same) {
+                    found.push((elsewhere.compilation.files[o.file].name.clone(), o.span));
+                }
+            }
+        }
+        found.sort_by(|a, b| (&a.0, a.1.start).cmp(&(&b.0, b.1.start)));
+        found.dedup();
+        found
+    }
+
+    /// The location of a span in a file named `file`, which `analysis` may not hold (a file of
+    /// another document's compilation): its text is the open document's or the disk's.
+    fn location_in(&self, analysis: &Analysis, file: &str, span: skill_compiler::Span) -> Option<Location> {
+        if let Some(index) = analysis.compilation.files.iter().position(|f| f.name == file) {
+            return analysis.location(index, span);
+        }
+        let text = match self.docs.get(file) {
+            Some(text) => text.clone(),
+            None if self.read_disk => std::fs::read_to_string(file).ok()?,
+            None => return None,
+        };
+        let source = SourceFile::new(file, text);
+        let lines = LineIndex::new(&source.text, self.encoding);
+        Some(Location::new(uri(file)?, lines.range(&source.text, span)))
     }
 
     /// The range of the declared name at a position, if it can be renamed.
@@ -307,8 +351,8 @@ impl Engine {
             }
         }
         let mut changes: HashMap<Uri, Vec<TextEdit>> = HashMap::new();
-        for occurrence in analysis.index.uses(id) {
-            let Some(location) = analysis.location(occurrence.file, occurrence.span) else {
+        for (file, span) in self.uses_everywhere(&analysis, id) {
+            let Some(location) = self.location_in(&analysis, &file, span) else {
                 continue;
             };
             changes

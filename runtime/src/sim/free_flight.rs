@@ -466,11 +466,15 @@ mod tests {
     use crate::plant::Plant;
     use crate::sim::{RapierPlant, Scene};
 
-    /// table.toml's arm with the table `drop_m` lower (the probe tip starts 1 mm above it).
+    /// table.toml's arm with the table `drop_m` lower, started where the probe tip is 1 mm above
+    /// the table (the scene itself starts it 5 cm higher).
     fn table_plant(drop_m: f64) -> RapierPlant {
         let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes/table.toml");
         let mut scene = Scene::from_file(&path).expect("example scene loads");
         scene.set("table.z", &(0.275 - drop_m).to_string()).expect("valid z");
+        scene
+            .set("robot.q0", "[0.0, -0.5, 0.0, 1.5, 0.0, -1.1415926535897931, 0.0]")
+            .expect("the start 1 mm above the table");
         RapierPlant::from_scene(&scene).expect("scene builds")
     }
 

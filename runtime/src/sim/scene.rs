@@ -236,6 +236,23 @@ pub struct Scene {
 
 const SECTIONS: [&str; 4] = ["robot", "sim", "sensor", "objects"];
 
+/// The fields of `[objects.NAME]`: `objects.FIELD` sets one of them in every object.
+const OBJECT_FIELDS: [&str; 13] = [
+    "kind",
+    "xyz",
+    "rpy",
+    "friction",
+    "size",
+    "radius",
+    "length",
+    "height",
+    "mass",
+    "stiffness",
+    "preload_n",
+    "damping",
+    "travel",
+];
+
 impl Scene {
     /// Reads a scene file. Relative paths inside it (the URDF) are relative to the file.
     pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
@@ -329,6 +346,12 @@ impl Scene {
     /// may stand for `objects.NAME`, `x`/`y`/`z` for the components of `xyz`, `roll`/`pitch`/`yaw` for
     /// `rpy`, and a number for an array index (`table.size.2`). Values are TOML (`0.1`, `[1, 2, 3]`,
     /// `true`); anything else is taken as a string. On error the scene is left unchanged.
+    ///
+    /// A key that ends in `+` or `-` changes a number (or each number of an array) by the value
+    /// instead of replacing it: `--set table.z+=0.015` raises the table 1.5 cm,
+    /// `--set table.xyz-=[0.02, 0, 0]` moves it 2 cm towards the robot (an `rpy` the file leaves
+    /// out counts as zero). `objects.FIELD` without an object's name changes that field of every
+    /// object: `--set objects.z+=0.03` raises the whole scene 3 cm, as one key.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
         let bad = |reason: String| SceneError::BadOverride {
             file: self.file.clone(),
@@ -336,7 +359,12 @@ impl Scene {
             value: value.to_owned(),
             reason,
         };
-        let mut path: Vec<String> = key.split('.').map(str::to_owned).collect();
+        let (plain_key, sign) = match (key.strip_suffix('+'), key.strip_suffix('-')) {
+            (Some(k), _) => (k.trim_end(), Some(1.0)),
+            (_, Some(k)) => (k.trim_end(), Some(-1.0)),
+            _ => (key, None),
+        };
+        let mut path: Vec<String> = plain_key.split('.').map(str::to_owned).collect();
         if path.iter().any(String::is_empty) {
             return Err(bad("empty key segment".to_owned()));
         }
@@ -370,8 +398,45 @@ impl Scene {
         if path.last().is_none_or(|seg| seg != "seed") {
             floats_in_value(&mut new_value);
         }
+        // `objects.FIELD`: the field of every object.
+        let every_object = path[0] == "objects"
+            && path
+                .get(1)
+                .is_some_and(|field| OBJECT_FIELDS.contains(&field.as_str()) && !object_names.contains(field));
+        let paths: Vec<Vec<String>> = if every_object {
+            if object_names.is_empty() {
+                return Err(bad("the scene has no objects".to_owned()));
+            }
+            object_names
+                .iter()
+                .map(|object| {
+                    let mut each = path.clone();
+                    each.insert(1, object.clone());
+                    each
+                })
+                .collect()
+        } else {
+            vec![path]
+        };
         let mut raw = self.raw.clone();
-        set_path(&mut raw, &path, new_value).map_err(bad)?;
+        for path in &paths {
+            // An `rpy` the file leaves out is zero: set one of its angles in the zeros.
+            if path.len() == 4 && get_path(&raw, &path[..3]).is_none() {
+                if let Some(zeros) = default_of(&path[..3]) {
+                    set_path(&mut raw, &path[..3], zeros).map_err(bad)?;
+                }
+            }
+            let value = match sign {
+                None => new_value.clone(),
+                Some(sign) => {
+                    let old = get_path(&raw, path).or_else(|| default_of(path));
+                    let old = old.ok_or_else(|| bad(format!("`{}` has no value to change", path.join("."))))?;
+                    add_scaled(&old, &new_value, sign)
+                        .map_err(|reason| bad(format!("`{}`: {reason}", path.join("."))))?
+                }
+            };
+            set_path(&mut raw, path, value).map_err(bad)?;
+        }
         let spec = typed(&raw, &self.file).map_err(|err| match err {
             SceneError::Syntax { message, .. } => bad(message),
             other => other,
@@ -414,6 +479,63 @@ fn floats_in_value(value: &mut toml::Value) {
         toml::Value::Array(items) => items.iter_mut().for_each(floats_in_value),
         toml::Value::Table(table) => floats_everywhere(table),
         _ => {}
+    }
+}
+
+/// The value at `path` in `table`, if there is one.
+fn get_path(table: &toml::Table, path: &[String]) -> Option<toml::Value> {
+    let (head, rest) = path.split_first()?;
+    let mut value = table.get(head)?;
+    for segment in rest {
+        value = match value {
+            toml::Value::Table(inner) => inner.get(segment)?,
+            toml::Value::Array(items) => items.get(segment.parse::<usize>().ok()?)?,
+            _ => return None,
+        };
+    }
+    Some(value.clone())
+}
+
+/// The value a file may leave out that a relative change starts from: an object's `rpy` (or
+/// one of its angles) is zero.
+fn default_of(path: &[String]) -> Option<toml::Value> {
+    match path {
+        [objects, _, field] if objects == "objects" && field == "rpy" => {
+            Some(toml::Value::Array(vec![toml::Value::Float(0.0); 3]))
+        }
+        [objects, _, field, _] if objects == "objects" && field == "rpy" => Some(toml::Value::Float(0.0)),
+        _ => None,
+    }
+}
+
+/// `old + sign × delta` for a number, or element by element for arrays of numbers of one length.
+fn add_scaled(old: &toml::Value, delta: &toml::Value, sign: f64) -> Result<toml::Value, String> {
+    let number = |value: &toml::Value| match value {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    };
+    match (old, delta) {
+        (toml::Value::Array(olds), toml::Value::Array(deltas)) => {
+            if olds.len() != deltas.len() {
+                return Err(format!(
+                    "{} values to change by {} (give one change per value)",
+                    olds.len(),
+                    deltas.len()
+                ));
+            }
+            olds.iter()
+                .zip(deltas)
+                .map(|(o, d)| add_scaled(o, d, sign))
+                .collect::<Result<Vec<_>, _>>()
+                .map(toml::Value::Array)
+        }
+        (toml::Value::Array(_), _) => Err("an array changes by an array of the same length".to_owned()),
+        _ => match (number(old), number(delta)) {
+            (Some(o), Some(d)) => Ok(toml::Value::Float(o + sign * d)),
+            (None, _) => Err(format!("`{old}` is not a number to change")),
+            (_, None) => Err(format!("`{delta}` is not a number to change by")),
+        },
     }
 }
 

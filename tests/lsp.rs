@@ -809,3 +809,31 @@ fn completion_of_an_axis_frame_in_learn() {
     let labels: Vec<String> = engine.completion(ROOT, position).into_iter().map(|i| i.label).collect();
     assert_eq!(labels, ["contact", "base", "tool"]);
 }
+
+#[test]
+fn completion_of_entry_actions_control_modes_and_outcomes() {
+    let mut engine = engine(Encoding::Utf16);
+    for (line, typed, expected) in [
+        (
+            "        move approach\n",
+            "        entry \n",
+            "reset_integral shift_goal tare",
+        ),
+        (
+            "        move approach\n",
+            "        control position x y z, \n",
+            "force position",
+        ),
+        (
+            "    terminal missed: failure\n",
+            "    terminal missed: \n",
+            "failure success",
+        ),
+    ] {
+        let text = PROBE.replacen(line, typed, 1);
+        engine.open(ROOT, &text);
+        let offset = text.find(typed).expect("typed") + typed.len() - 1;
+        let position = LineIndex::new(&text, Encoding::Utf16).position(&text, offset);
+        assert_eq!(labels(&engine, position), expected, "{typed:?}");
+    }
+}

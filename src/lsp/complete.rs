@@ -80,6 +80,33 @@ pub fn complete(text: &str, offset: usize, analysis: Option<&Analysis>) -> Vec<C
         }
         return items;
     }
+    if ends_with_word("entry") || (before.trim_start().starts_with("entry ") && before.ends_with(',')) {
+        return keywords(&[
+            (
+                "reset_integral",
+                "reset_integral",
+                "reset the force controller's integral",
+            ),
+            ("tare", "tare", "zero the force sensor at entry"),
+            (
+                "shift_goal",
+                "shift_goal",
+                "move the motion's goal by where the state starts",
+            ),
+        ]);
+    }
+    if ends_with_word("control") || (before.trim_start().starts_with("control ") && before.ends_with(',')) {
+        return keywords(&[
+            ("position", "position ${1:all}", "position-controlled axes"),
+            ("force", "force ${1:z}", "force-controlled axes"),
+        ]);
+    }
+    if before.trim_start().starts_with("terminal ") && before.ends_with(':') {
+        return keywords(&[
+            ("success", "success", "the skill succeeded"),
+            ("failure", "failure \"${1:why}\"", "the skill failed, with a message"),
+        ]);
+    }
     if before.ends_with("entered(") {
         return scope.names(&[Kind::State]);
     }

@@ -173,6 +173,14 @@ impl Index {
                 index.task(file, task);
             }
         }
+        // A rule's span may take in the spaces and line breaks after it; a symbol's range
+        // ends where its text does.
+        for def in &mut index.defs {
+            let text = files[def.file].text.as_bytes();
+            while def.full.end > def.full.start && text.get(def.full.end - 1).is_some_and(u8::is_ascii_whitespace) {
+                def.full.end -= 1;
+            }
+        }
         index
     }
 

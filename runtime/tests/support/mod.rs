@@ -261,8 +261,8 @@ pub(crate) fn learn(skill: &ir::Skill) -> Learned {
     learn_skill(skill, &loaded.demo, &[], &LearnOptions::default()).expect("touch learns from its demonstration")
 }
 
-/// The table scene the touch was demonstrated in, with the arm where the demonstrations start
-/// it (`demogen::SCENE_Q0`, the probe tip 1 mm above the table; the shipped scene starts it 5 cm
+/// The table scene the touch was demonstrated in, with the arm at the scenes' earlier start
+/// (`demogen::SCENE_Q0`, the probe tip 1 mm above the table; the shipped scene starts it 5 cm
 /// higher since issue 25, item 5): the tests here were measured from that start.
 pub(crate) fn table() -> Scene {
     let mut scene = Scene::from_file(&root().join("examples/scenes/table.toml")).expect("the table scene loads");

@@ -114,7 +114,7 @@ pub fn describe(analysis: &Analysis, occurrence: &Occurrence) -> Option<String> 
         }
         What::Guard(name) => {
             let meaning = match name.as_str() {
-                "motion_done" => "true once the state's motion has reached its goal (a state without `move`: at once)",
+                "motion_done" => "true once the state's motion has reached its goal (with `repeat N`, after the last run); a state that runs no motion cannot use it",
                 _ => return None,
             };
             let _ = writeln!(out, "```skill\n{name}\n```\nGuard: {meaning}.");

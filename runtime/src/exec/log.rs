@@ -155,7 +155,7 @@ fn push_fixed(out: &mut Vec<u8>, value: f64, precision: usize) {
     };
     let scaled = value.abs() * scale;
     // Below 2^36 an ulp of `scaled` is at most 2^-16, far inside the guard band below.
-    if !(scaled < 68_719_476_736.0) {
+    if scaled.is_nan() || scaled >= 68_719_476_736.0 {
         return fallback(out);
     }
     // Truncation is the floor of a non-negative value (no libm call).

@@ -299,3 +299,54 @@ fn numbers_that_would_size_work_or_switch_a_check_off_are_bounded() {
     );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn the_report_opens_on_whether_it_worked() {
+    let dir = workspace("report");
+    let out = skillc(&dir, &["eval", "--skill", "touch", "--out", "report"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let html = std::fs::read_to_string(dir.join("report/index.html")).expect("index.html");
+    let summary = html.find("<section id=summary>").expect("a summary section");
+    let verdict = html.find("skill and task trials pass").expect("the verdict");
+    let table = html.find("<table id=trials>").expect("the full table");
+    let image = html.find("<img").expect("plots");
+    assert!(
+        summary < verdict && verdict < table && table < image,
+        "summary, then table, then plots"
+    );
+    // The touch's line counts its skill trials (replays are not judged) and links its plots.
+    let trials = std::fs::read_to_string(dir.join("report/summary.json")).expect("summary");
+    let value: serde_json::Value = serde_json::from_str(&trials).expect("json");
+    let skill_trials = value["trials"]
+        .as_array()
+        .expect("trials")
+        .iter()
+        .filter(|t| t["mode"] == "skill")
+        .count();
+    assert!(skill_trials > 0);
+    assert!(
+        html.contains(&format!("<td>{skill_trials} / {skill_trials}</td>")),
+        "passed / run for touch"
+    );
+    assert!(html.contains("<a href=\"#trial-touch\">plots</a>") && html.contains("<h2 id=\"trial-touch\">"));
+    // A failed trial is listed first with its reason: loosen nothing, tighten the force limit.
+    let out = skillc(
+        &dir,
+        &[
+            "eval",
+            "--skill",
+            "touch",
+            "--no-replay",
+            "--limit",
+            "force=1",
+            "--out",
+            "tight",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let html = std::fs::read_to_string(dir.join("tight/index.html")).expect("index.html");
+    let failures = html.find("<h2>Failed trials</h2>").expect("failures listed");
+    assert!(failures < html.find("<table id=trials>").expect("table"));
+    assert!(html[failures..].contains("reflex:contact_force"), "the reason");
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

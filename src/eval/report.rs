@@ -177,14 +177,17 @@ fn fill(
     let mut html = String::new();
     html.push_str("<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>skillc eval</title>\n<style>\n");
     html.push_str("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td.l,th.l{text-align:left}.yes{background:#dfd}.no{background:#fdd}.err{background:#fb8}img{max-width:100%;border:1px solid #eee;margin:4px 0}pre{background:#f6f6f6;padding:1em}\n");
+    html.push_str(".summary td,.summary th{font-size:1.05em}.failures li{margin:4px 0}input#filter{margin:8px 0;padding:4px;width:24em}th.sort{cursor:pointer}\n");
     html.push_str("</style></head><body>\n<h1>skillc eval</h1>\n");
+    html.push_str(&first_screen(outcomes, skills, tasks));
     let _ = writeln!(
         html,
         "<p>{} trials in {elapsed_s:.1} s on {} worker threads. Each skill is learned once from its demonstration and reproduced in every variant of its scene; <em>replay</em> is the thesis's baseline (the learned motions under pure impedance control, no force control, no contact adaptation). A <em>task</em> runs its steps in sequence on one arm, each step learned once from its own demonstration and judged as a skill trial is, against its demonstration's peak force; tasks have no replay baseline.</p>",
         outcomes.len(),
         rayon::current_num_threads()
     );
-    html.push_str("<table><tr><th class=l>skill</th><th class=l>variant</th><th class=l>mode</th><th>success</th><th>force RMS / learned %</th><th>contact %</th><th>peak N</th><th>stop N</th><th>learned N</th><th>goal error mm</th><th>time s</th><th class=l>message</th></tr>\n");
+    html.push_str("<h2 id=all>Every trial</h2>\n<input id=filter type=search placeholder=\"filter rows (skill, variant, mode, reason…)\" aria-label=\"filter rows\">\n");
+    html.push_str("<table id=trials><tr><th class=l>skill</th><th class=l>variant</th><th class=l>mode</th><th>success</th><th>force RMS / learned %</th><th>contact %</th><th>peak N</th><th>stop N</th><th>learned N</th><th>goal error mm</th><th>time s</th><th class=l>message</th></tr>\n");
     for outcome in outcomes {
         let r = &outcome.result;
         let class = if r.error {
@@ -236,8 +239,9 @@ fn fill(
         }
     }
     html.push_str("</table>\n");
+    html.push_str(TABLE_SCRIPT);
     for skill in skills {
-        let _ = writeln!(html, "<h2>{}</h2>", escape(skill.name));
+        let _ = writeln!(html, "<h2 id=\"{}\">{}</h2>", anchor(skill.name), escape(skill.name));
         if let Some(error) = skill.error {
             let _ = writeln!(html, "<p class=err>could not learn: {}</p>", escape(error));
             continue;
@@ -273,7 +277,8 @@ fn fill(
     for task in tasks {
         let _ = writeln!(
             html,
-            "<h2>task {}</h2>\n<p>No replay baseline: a task's steps start where the last ended (and `at:` where an earlier step found a state), which a replay of each demonstration cannot do.</p>",
+            "<h2 id=\"{}\">task {}</h2>\n<p>No replay baseline: a task's steps start where the last ended (and `at:` where an earlier step found a state), which a replay of each demonstration cannot do.</p>",
+            anchor(task.name),
             escape(task.name)
         );
         if let Some(error) = task.error {
@@ -335,6 +340,149 @@ fn fill(
     );
     atomic::write(&out.join("index.html"), html.as_bytes())
 }
+
+/// The report's first screen: whether it worked. One line per skill and task (trials passed of
+/// those run, the worst force error, the worst peak against its bound), then every failed trial
+/// with its reason in words and a link to its plots; the full table follows further down.
+fn first_screen(outcomes: &[Outcome], skills: &[SkillView<'_>], tasks: &[TaskView<'_>]) -> String {
+    let judged = |o: &&Outcome| o.result.mode == "skill" || o.result.mode == "task";
+    let failed: Vec<&Outcome> = outcomes
+        .iter()
+        .filter(judged)
+        .filter(|o| o.result.error || !o.result.success)
+        .collect();
+    let run = outcomes.iter().filter(judged).count();
+    let mut html = String::new();
+    let verdict = if failed.is_empty() {
+        format!("<p class=yes style=\"padding:6px\"><strong>All {run} skill and task trials pass.</strong> (Replay baselines are reported but not judged.)</p>")
+    } else {
+        format!(
+            "<p class=no style=\"padding:6px\"><strong>{} of {run} skill and task trials fail.</strong> They are listed first below.</p>",
+            failed.len()
+        )
+    };
+    html.push_str("<section id=summary>\n");
+    html.push_str(&verdict);
+    html.push_str("<table class=summary><tr><th class=l>skill or task</th><th>passed / run</th><th>worst force RMS %</th><th>worst peak N (its bound)</th><th class=l>plots</th></tr>\n");
+    let names = skills
+        .iter()
+        .map(|s| (s.name, "skill"))
+        .chain(tasks.iter().map(|t| (t.name, "task")));
+    let mut rows: Vec<(bool, String)> = Vec::new();
+    for (name, mode) in names {
+        let trials: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| o.result.skill == name && o.result.mode == mode)
+            .collect();
+        let passed = trials.iter().filter(|o| o.result.success && !o.result.error).count();
+        let worst_rms = trials
+            .iter()
+            .filter_map(|o| o.result.force_rms_rel)
+            .fold(None, |worst: Option<f64>, v| Some(worst.map_or(v, |w| w.max(v))));
+        // The worst peak is the one nearest its bound (or furthest past it).
+        let worst_peak = trials
+            .iter()
+            .map(|o| (o.result.peak_force_n, o.result.peak_bound_n))
+            .max_by(|a, b| {
+                let share = |(peak, bound): (f64, Option<f64>)| bound.map_or(0.0, |b| peak / b.max(1e-9));
+                share(*a).total_cmp(&share(*b))
+            });
+        let peak = worst_peak.map_or("-".to_string(), |(peak, bound)| match bound {
+            Some(bound) => format!("{peak:.1} ({bound:.1})"),
+            None => format!("{peak:.1}"),
+        });
+        let ok = passed == trials.len() && !trials.is_empty();
+        rows.push((
+            ok,
+            format!(
+                "<tr class={}><td class=l>{}{}</td><td>{passed} / {}</td><td>{}</td><td>{peak}</td><td class=l><a href=\"#{}\">plots</a></td></tr>\n",
+                if ok { "yes" } else { "no" },
+                if mode == "task" { "task " } else { "" },
+                escape(name),
+                trials.len(),
+                percent(worst_rms),
+                anchor(name)
+            ),
+        ));
+    }
+    // Failures first.
+    rows.sort_by_key(|(ok, _)| *ok);
+    for (_, row) in rows {
+        html.push_str(&row);
+    }
+    html.push_str("</table>\n");
+    if !failed.is_empty() {
+        html.push_str("<h2>Failed trials</h2>\n<ul class=failures>\n");
+        for o in &failed {
+            let r = &o.result;
+            let _ = writeln!(
+                html,
+                "<li><a href=\"#{}\">{} — {}</a> ({}): {}</li>",
+                anchor(&r.skill),
+                escape(&r.skill),
+                escape(&r.variant),
+                r.reason.as_deref().map_or("error".to_string(), escape),
+                escape(&r.message)
+            );
+        }
+        html.push_str("</ul>\n");
+    }
+    html.push_str("<p><a href=\"#all\">Every trial</a> (a table that sorts by a column when its heading is clicked and filters as you type) follows, then each skill's and task's plots.</p>\n</section>\n");
+    html
+}
+
+/// An HTML id for a skill or task name (letters, digits, `-` and `_` kept).
+fn anchor(name: &str) -> String {
+    let id: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    format!("trial-{id}")
+}
+
+/// A few lines of plain script: click a heading to sort the table by it, type to filter rows.
+/// The table reads the same without it.
+const TABLE_SCRIPT: &str = r#"<script>
+(function () {
+  var table = document.getElementById("trials");
+  var filter = document.getElementById("filter");
+  if (!table || !filter) { return; }
+  var head = table.rows[0];
+  var body = Array.prototype.slice.call(table.rows, 1);
+  filter.addEventListener("input", function () {
+    var needle = filter.value.toLowerCase();
+    body.forEach(function (row) {
+      row.style.display = row.textContent.toLowerCase().indexOf(needle) >= 0 ? "" : "none";
+    });
+  });
+  Array.prototype.forEach.call(head.cells, function (cell, column) {
+    cell.className += " sort";
+    cell.title = "sort by this column";
+    var ascending = true;
+    cell.addEventListener("click", function () {
+      var key = function (row) {
+        var text = row.cells[column] ? row.cells[column].textContent : "";
+        var number = parseFloat(text);
+        return isNaN(number) ? text : number;
+      };
+      body.sort(function (a, b) {
+        var x = key(a), y = key(b);
+        var order = (typeof x === typeof y) ? (x < y ? -1 : x > y ? 1 : 0) : (typeof x === "number" ? -1 : 1);
+        return ascending ? order : -order;
+      });
+      ascending = !ascending;
+      body.forEach(function (row) { table.tBodies[0].appendChild(row); });
+    });
+  });
+})();
+</script>
+"#;
 
 /// The real-demonstration results as text.
 pub(super) fn real_table(results: &[RealResult]) -> String {

@@ -207,8 +207,18 @@ fn noted_input(path: &Path) -> Option<PathBuf> {
     let inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     inputs
         .iter()
-        .find(|input| input.id == id)
+        // A noted input deleted since frees its inode for another file: it counts only while
+        // its path is still that file.
+        .find(|input| input.id == id && still_is(&input.path, &input.id))
         .map(|input| input.path.clone())
+}
+
+/// Whether `path` is still the file `id` names.
+fn still_is(path: &Path, id: &FileId) -> bool {
+    std::fs::metadata(path)
+        .ok()
+        .and_then(|meta| FileId::of(path, &meta))
+        .is_some_and(|now| now == *id)
 }
 
 /// The first noted input that lies inside the folder `dir`, as it was named when read.

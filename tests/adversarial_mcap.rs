@@ -752,13 +752,14 @@ fn a_rosbag2_folder_learns_what_its_mcap_file_learns() {
         &[],
     );
 
-    // Folders that are not readable bags.
+    // Folders that are not readable bags; one without metadata.yaml is a path given wrongly
+    // (usage, exit 2, as any folder where a file is expected).
     std::fs::create_dir(dir.join("no_metadata")).expect("dir");
     std::fs::write(dir.join("no_metadata/take.mcap"), &bytes).expect("write");
     expect_first(
         &dir,
         &learn_args("no_metadata", "out.json"),
-        1,
+        2,
         "error: `no_metadata` is a folder without `metadata.yaml`, so not a rosbag2 bag: pass the bag file `no_metadata/take.mcap` itself",
         &[],
     );

@@ -234,12 +234,21 @@ fn mcap_log(
     logs: &[(Option<&str>, &RunLog)],
     scene: &skill_runtime::sim::Scene,
 ) -> Result<Vec<u8>, Failure> {
-    // The names are a courtesy for viewers: without them the joints are called joint_1...
-    let names: Vec<String> =
-        skill_runtime::robot::Robot::from_urdf_file(&scene.urdf_path(), scene.spec().robot.tool.as_deref())
-            .map(|robot| robot.joints().iter().map(|joint| joint.name.clone()).collect())
-            .unwrap_or_default();
-    crate::ros::write_run_log(logs, &names)
+    // The names, the transforms and the description are for viewers: without the robot the
+    // joints are called joint_1... and the bag has no /tf.
+    let urdf = std::fs::read_to_string(scene.urdf_path()).ok();
+    let robot = urdf
+        .as_deref()
+        .and_then(|text| skill_runtime::robot::Robot::from_urdf_str(text, scene.spec().robot.tool.as_deref()).ok());
+    let names: Vec<String> = robot
+        .as_ref()
+        .map(|robot| robot.joints().iter().map(|joint| joint.name.clone()).collect())
+        .unwrap_or_default();
+    let description = match (&robot, &urdf) {
+        (Some(robot), Some(urdf)) => Some(crate::ros::RobotDescription { robot, urdf }),
+        _ => None,
+    };
+    crate::ros::write_run_log(logs, &names, description.as_ref())
         .map_err(|err| Failure::Usage(format!("cannot write `{}`: {}", path.display(), error_chain(&err))))
 }
 

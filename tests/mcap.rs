@@ -170,6 +170,9 @@ fn run_writes_its_log_as_mcap_with_one_message_per_tick() {
         (RunLogTopics::DESIRED_POSE, MsgType::PoseStamped),
         (RunLogTopics::WRENCH, MsgType::WrenchStamped),
         (RunLogTopics::STATE, MsgType::String),
+        (RunLogTopics::TF, MsgType::TfMessage),
+        (RunLogTopics::TF_STATIC, MsgType::TfMessage),
+        (RunLogTopics::ROBOT_DESCRIPTION, MsgType::String),
     ];
     assert_eq!(topics.len(), expected.len());
     for (topic, ty) in expected {
@@ -177,8 +180,11 @@ fn run_writes_its_log_as_mcap_with_one_message_per_tick() {
         assert_eq!(schema, ty.schema_name(), "{topic}");
         assert_eq!(schema_encoding, "ros2msg", "{topic}");
         assert_eq!(encoding, "cdr", "{topic}");
-        if ty != MsgType::String {
-            assert_eq!(payloads.len(), ticks, "{topic}: one message per tick");
+        match topic {
+            RunLogTopics::TF => assert_eq!(payloads.len(), ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS)),
+            RunLogTopics::TF_STATIC | RunLogTopics::ROBOT_DESCRIPTION => assert_eq!(payloads.len(), 1, "{topic}"),
+            _ if ty != MsgType::String => assert_eq!(payloads.len(), ticks, "{topic}: one message per tick"),
+            _ => {}
         }
     }
     let joints = JointState::decode(&topics[RunLogTopics::JOINT_STATES].3[0]).expect("JointState");
@@ -490,5 +496,88 @@ fn malformed_bags_are_refused_naming_file_topic_and_message() {
         ],
     );
     assert_eq!(out.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+/// `/tf` read back with the `mcap` crate's reader (not skillc's bag reader): its tool link's
+/// transform at each stamp equals `/tool_pose` at that stamp within 1e-9; `/robot_description`
+/// is the file's first message and carries the scene's URDF; the latched topics are marked as
+/// rosbag2 marks them.
+#[test]
+fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
+    use skillc::ros::msgs::decode_tf;
+    let dir = temp_dir("tf");
+    let log = dir.join("touch.log.mcap");
+    let out = skillc(
+        root(),
+        &[
+            "run",
+            "stdlib-skills/touch.skill",
+            "--demo",
+            "examples/demos/touch.csv",
+            "--scene",
+            "examples/scenes/table.toml",
+            "-o",
+            log.to_str().expect("utf-8 path"),
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let bytes = std::fs::read(&log).expect("read bag");
+    let mut first_topic = None;
+    let mut poses = BTreeMap::new();
+    let mut transforms = Vec::new();
+    let mut description = None;
+    for message in mcap::MessageStream::new(&bytes).expect("MCAP") {
+        let message = message.expect("message");
+        first_topic.get_or_insert_with(|| message.channel.topic.clone());
+        let latched = message
+            .channel
+            .metadata
+            .get("offered_qos_profiles")
+            .is_some_and(|qos| qos.contains("durability: 1"));
+        match message.channel.topic.as_str() {
+            RunLogTopics::TOOL_POSE => {
+                let pose = PoseStamped::decode(&message.data).expect("pose");
+                poses.insert(message.log_time, pose);
+            }
+            RunLogTopics::TF => {
+                assert!(!latched, "/tf is not latched");
+                transforms.push((message.log_time, decode_tf(&message.data).expect("TFMessage")));
+            }
+            RunLogTopics::TF_STATIC => assert!(latched, "/tf_static is latched"),
+            RunLogTopics::ROBOT_DESCRIPTION => {
+                assert!(latched, "/robot_description is latched");
+                description = Some(decode_string(&message.data).expect("String"));
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(first_topic.as_deref(), Some(RunLogTopics::ROBOT_DESCRIPTION));
+    let urdf = std::fs::read_to_string(root().join("examples/robots/lwr4.urdf")).expect("urdf");
+    assert_eq!(description.as_deref(), Some(urdf.as_str()));
+    let scene = std::fs::read_to_string(root().join("examples/scenes/table.toml")).expect("scene");
+    let tool = scene
+        .lines()
+        .find_map(|line| line.trim().strip_prefix("tool = \""))
+        .and_then(|rest| rest.strip_suffix('"'))
+        .unwrap_or("probe_tip")
+        .to_string();
+    assert!(transforms.len() > 100, "{} /tf messages", transforms.len());
+    let mut worst = 0.0f64;
+    for (stamp, message) in &transforms {
+        let frame = message
+            .iter()
+            .find(|t| t.child_frame_id == tool)
+            .unwrap_or_else(|| panic!("/tf has the tool link `{tool}`"));
+        assert_eq!(frame.header.frame_id, "base");
+        let pose = &poses[stamp];
+        for axis in 0..3 {
+            worst = worst.max((frame.translation[axis] - pose.position[axis]).abs());
+        }
+        // Quaternions q and -q are the same rotation.
+        let dot: f64 = (0..4).map(|i| frame.rotation_xyzw[i] * pose.orientation_xyzw[i]).sum();
+        worst = worst.max(1.0 - dot.abs());
+    }
+    assert!(worst < 1e-9, "/tf's tool frame is /tool_pose within {worst:e}");
     std::fs::remove_dir_all(&dir).expect("clean up");
 }

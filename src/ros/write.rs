@@ -39,6 +39,42 @@ impl RunLogTopics {
     /// `std_msgs/msg/String` at the first tick and at every change of state: the state's name
     /// (`step/state` in a task).
     pub const STATE: &'static str = "/skill_state";
+    /// `tf2_msgs/msg/TFMessage` every [`TF_PERIOD_TICKS`] ticks: the pose in frame `base` of
+    /// every link the joints move, from the logged joint positions (a star from `base`, not
+    /// robot_state_publisher's parent-to-child chain; a viewer composes both alike).
+    pub const TF: &'static str = "/tf";
+    /// `tf2_msgs/msg/TFMessage` once, latched: the links no joint moves.
+    pub const TF_STATIC: &'static str = "/tf_static";
+    /// `std_msgs/msg/String` once, first in the file, latched: the robot's URDF.
+    pub const ROBOT_DESCRIPTION: &'static str = "/robot_description";
+}
+
+/// `/tf` is written every this many ticks: 100 Hz at the 1 kHz control rate (every tick would
+/// triple the file for a 3-D view that cannot show more).
+pub const TF_PERIOD_TICKS: usize = 10;
+
+/// What a run log's bag needs of the robot to carry its transforms and description.
+pub struct RobotDescription<'a> {
+    /// The model whose forward kinematics give the links' poses.
+    pub robot: &'a skill_runtime::robot::Robot,
+    /// The URDF text, for `/robot_description`.
+    pub urdf: &'a str,
+}
+
+/// rosbag2's QoS metadata of a latched topic (transient local, keep last 1), as `ros2 bag
+/// record` writes it in a channel's `offered_qos_profiles`, so `ros2 bag play` republishes the
+/// topic to late subscribers.
+const LATCHED_QOS: &str = "- history: 1\n  depth: 1\n  reliability: 1\n  durability: 1\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false";
+
+/// A link's pose as a transform from `base`.
+fn link_transform(t: Time, name: &str, pose: &nalgebra::Isometry3<f64>) -> super::msgs::TransformStamped {
+    let q = pose.rotation.quaternion();
+    super::msgs::TransformStamped {
+        header: header(t, BASE_FRAME),
+        child_frame_id: name.to_owned(),
+        translation: [pose.translation.x, pose.translation.y, pose.translation.z],
+        rotation_xyzw: [q.i, q.j, q.k, q.w],
+    }
 }
 
 /// An MCAP writer into memory with the channels registered by topic.
@@ -63,8 +99,12 @@ impl Bag {
             let schema = writer
                 .add_schema(ty.schema_name(), "ros2msg", ty.definition().as_bytes())
                 .map_err(BagError::Write)?;
+            let mut metadata = BTreeMap::new();
+            if topic == RunLogTopics::TF_STATIC || topic == RunLogTopics::ROBOT_DESCRIPTION {
+                metadata.insert("offered_qos_profiles".to_string(), LATCHED_QOS.to_string());
+            }
             let id = writer
-                .add_channel(schema, topic, "cdr", &BTreeMap::new())
+                .add_channel(schema, topic, "cdr", &metadata)
                 .map_err(BagError::Write)?;
             ids.insert(topic, id);
         }
@@ -154,14 +194,51 @@ pub fn write_demo(demo: &Demo, wrench_frame: Option<WrenchFrame>) -> Result<Vec<
 /// Consecutive run logs (one, or a task's steps: states written `step/state`) as MCAP on the
 /// [`RunLogTopics`]. `joint_names` name the joints (fewer names than joints: `joint_N`). A log
 /// whose clock starts again is shifted to follow the one before it, so times never go back.
-pub fn write_run_log(logs: &[(Option<&str>, &RunLog)], joint_names: &[String]) -> Result<Vec<u8>, BagError> {
-    let mut bag = Bag::new(&[
+pub fn write_run_log(
+    logs: &[(Option<&str>, &RunLog)],
+    joint_names: &[String],
+    description: Option<&RobotDescription<'_>>,
+) -> Result<Vec<u8>, BagError> {
+    let mut topics = vec![
         (RunLogTopics::JOINT_STATES, MsgType::JointState),
         (RunLogTopics::TOOL_POSE, MsgType::PoseStamped),
         (RunLogTopics::DESIRED_POSE, MsgType::PoseStamped),
         (RunLogTopics::WRENCH, MsgType::WrenchStamped),
         (RunLogTopics::STATE, MsgType::String),
-    ])?;
+    ];
+    if description.is_some() {
+        topics.splice(
+            0..0,
+            [
+                (RunLogTopics::ROBOT_DESCRIPTION, MsgType::String),
+                (RunLogTopics::TF_STATIC, MsgType::TfMessage),
+                (RunLogTopics::TF, MsgType::TfMessage),
+            ],
+        );
+    }
+    let mut bag = Bag::new(&topics)?;
+    let first_t = logs
+        .iter()
+        .find_map(|(_, log)| log.ticks.first())
+        .map_or(Time::from_seconds(0.0), |tick| Time::from_seconds(tick.t_s));
+    let mut kinematics = None;
+    if let Some(description) = description {
+        let robot = description.robot;
+        bag.put(
+            RunLogTopics::ROBOT_DESCRIPTION,
+            first_t,
+            &encode_string(description.urdf),
+        )?;
+        let mut data = robot.data();
+        robot.forward_kinematics(&mut data, &vec![0.0; robot.dof()]);
+        let fixed: Vec<_> = (0..robot.links().len())
+            .filter(|&link| robot.links()[link].body.is_none())
+            .map(|link| link_transform(first_t, &robot.links()[link].name, &robot.link_in_base(&data, link)))
+            .collect();
+        bag.put(RunLogTopics::TF_STATIC, first_t, &super::msgs::encode_tf(&fixed))?;
+        kinematics = Some((robot, data));
+    }
+    let mut tick_index = 0usize;
     let mut offset_s = 0.0;
     let mut last_s = f64::NEG_INFINITY;
     let mut last_state: Option<String> = None;
@@ -197,6 +274,17 @@ pub fn write_run_log(logs: &[(Option<&str>, &RunLog)], joint_names: &[String]) -
                 torque: [-w[3], -w[4], -w[5]],
             };
             bag.put(RunLogTopics::WRENCH, t, &wrench.encode())?;
+            if let Some((robot, data)) = kinematics.as_mut() {
+                if tick_index % TF_PERIOD_TICKS == 0 && dof == robot.dof() {
+                    robot.forward_kinematics(data, &tick.joint_state[..dof]);
+                    let moving: Vec<_> = (0..robot.links().len())
+                        .filter(|&link| robot.links()[link].body.is_some())
+                        .map(|link| link_transform(t, &robot.links()[link].name, &robot.link_in_base(data, link)))
+                        .collect();
+                    bag.put(RunLogTopics::TF, t, &super::msgs::encode_tf(&moving))?;
+                }
+            }
+            tick_index += 1;
             let state = log.states.get(tick.state as usize).map_or("?", String::as_str);
             let state = match step {
                 Some(step) => format!("{step}/{state}"),

@@ -86,6 +86,11 @@ pub struct LearnArgs {
     /// MCAP: read the pose from TF, the transform to this tool frame (one direct transform, not a chain).
     #[arg(long, value_name = "FRAME")]
     pub tf_child: Option<String>,
+    /// The contact phase to learn from (1, 2, ...), when the demonstration has several (a part
+    /// wiped three times with lift-offs between): default, the whole demonstration, or the
+    /// longest phase when the template expects one contact (said so).
+    #[arg(long, value_name = "N")]
+    pub phase: Option<usize>,
     /// Also draw what was learned into this folder (SVG): the demonstration against the
     /// rollout with segments and frames, forces in the world and compliant frames.
     #[arg(long, value_name = "DIR")]
@@ -221,6 +226,7 @@ fn learn(args: &LearnArgs) -> Result<(String, Vec<String>), Failure> {
         },
         keep_bias: args.keep_bias,
         friction_mu: args.friction,
+        phase: args.phase,
     };
     let dialect = Dialect {
         delimiter: args.delimiter,
@@ -288,6 +294,16 @@ pub fn summary(learned: &Learned) -> String {
     for warning in &learned.demo.warnings {
         let _ = writeln!(out, "  warning: {warning}");
     }
+    if let Some(phases) = &learned.quality.phases {
+        let _ = writeln!(out, "  {}", phases_line(phases));
+        for moved in &phases.moved {
+            let _ = writeln!(
+                out,
+                "  segment {} starts at the contact's {}: {:.3} → {:.3} s",
+                moved.segment, moved.end, moved.from_to_s[0], moved.from_to_s[1]
+            );
+        }
+    }
     let _ = writeln!(out, "segments:");
     for (index, segment) in learned.segments.iter().enumerate() {
         let _ = writeln!(
@@ -333,6 +349,13 @@ pub fn summary(learned: &Learned) -> String {
             z.y,
             z.z
         );
+        if let Some(window) = learned.quality.onset_frames.get(name) {
+            let _ = writeln!(
+                out,
+                "  {:<10} z from the first contact window {:.3}-{:.3} s ({} samples, {:.2} N, scatter {:.1}°)",
+                "", window.window_s[0], window.window_s[1], window.samples, window.mean_n, window.scatter_deg
+            );
+        }
         if let Some(check) = learned.quality.normals.get(name) {
             let _ = writeln!(
                 out,
@@ -415,6 +438,31 @@ pub fn summary(learned: &Learned) -> String {
         let _ = writeln!(out, "threshold {name} = {:.2}", threshold.value);
     }
     out
+}
+
+/// `3 contact phases: 4.10-13.20 s, ...; learned phase 2 (the longest)`.
+pub fn phases_line(phases: &skill_runtime::skill::PhaseReport) -> String {
+    let count = phases.phases_s.len();
+    let list: Vec<String> = phases
+        .phases_s
+        .iter()
+        .zip(&phases.median_n)
+        .map(|([start, end], median)| format!("{start:.2}-{end:.2} s ({median:.1} N)"))
+        .collect();
+    let mut line = match count {
+        0 => format!("no contact phase (force under {:.2} N)", phases.on_n),
+        1 => format!("1 contact phase: {}", list.join(", ")),
+        _ => format!("{count} contact phases: {}", list.join(", ")),
+    };
+    if let Some(phase) = phases.learned {
+        let why = match phases.chosen_by.as_str() {
+            "longest" => " (the longest; --phase N picks another)",
+            "--phase" => " (--phase)",
+            _ => "",
+        };
+        let _ = write!(line, "; learned phase {phase}{why}");
+    }
+    line
 }
 
 /// Arguments of `skillc rollout`.

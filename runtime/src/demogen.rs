@@ -331,8 +331,111 @@ fn moving(label: &'static str, duration_s: f64, from: Vector3<f64>, to: Vector3<
     }
 }
 
+/// How a generated demonstration departs from the shipped one (issue 26): more contact passes,
+/// position noise, another rate, a slower or faster person, a tilted surface. The default
+/// changes nothing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variation {
+    /// Contact passes of a wipe, the tool lifted 4 cm between them, each at its own force
+    /// (1: the shipped wipe; the other skills ignore it).
+    pub passes: usize,
+    /// White noise added to every position coordinate \[m\] (a low-grade tracker).
+    pub position_noise_m: f64,
+    /// The output rate \[Hz\]: every `round(1000 / rate)`-th sample is kept.
+    pub rate_hz: f64,
+    /// Every time multiplied by this (above 1: a slower person).
+    pub time_scale: f64,
+    /// The whole scene turned about base x through the surface's point \[rad\].
+    pub tilt_rad: f64,
+}
+
+impl Default for Variation {
+    fn default() -> Self {
+        Variation {
+            passes: 1,
+            position_noise_m: 0.0,
+            rate_hz: RATE_HZ,
+            time_scale: 1.0,
+            tilt_rad: 0.0,
+        }
+    }
+}
+
 /// Generates the demonstration of `skill` with `seed`.
 pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
+    generate_varied(skill, seed, &Variation::default())
+}
+
+/// Generates the demonstration of `skill` with `seed`, varied as `variation` says.
+pub fn generate_varied(skill: StdSkill, seed: u64, variation: &Variation) -> Demonstration {
+    let mut demo = generate_at_1khz(skill, seed, variation);
+    vary(&mut demo, seed, variation);
+    demo
+}
+
+/// Applies a variation's noise, rate, time scale and tilt to a generated demonstration.
+fn vary(demo: &mut Demonstration, seed: u64, variation: &Variation) {
+    let step = (RATE_HZ / variation.rate_hz).round().max(1.0) as usize;
+    if step > 1 {
+        demo.samples = demo.samples.iter().step_by(step).copied().collect();
+        demo.truth.rate_hz = RATE_HZ / step as f64;
+    }
+    let scale = variation.time_scale;
+    if scale != 1.0 {
+        for sample in &mut demo.samples {
+            sample.t_s *= scale;
+        }
+        for segment in &mut demo.truth.segments {
+            segment.start_s *= scale;
+            segment.end_s *= scale;
+        }
+        for turn in &mut demo.truth.turns_s {
+            *turn *= scale;
+        }
+        demo.truth.peak_time_s *= scale;
+        demo.truth.rate_hz /= scale;
+    }
+    if let Some(last) = demo.samples.last() {
+        if let Some(segment) = demo.truth.segments.last_mut() {
+            segment.end_s = last.t_s;
+        }
+    }
+    if variation.position_noise_m > 0.0 {
+        let mut rng = SplitMix64::new(seed ^ 0x05ee_d0f0_015e);
+        for sample in &mut demo.samples {
+            sample.position_m += Vector3::new(rng.normal(), rng.normal(), rng.normal()) * variation.position_noise_m;
+        }
+    }
+    if variation.tilt_rad != 0.0 {
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), variation.tilt_rad);
+        let pivot = Vector3::new(0.55, 0.0, SURFACE_Z_M);
+        for sample in &mut demo.samples {
+            sample.position_m = pivot + turn * (sample.position_m - pivot);
+            sample.orientation = turn * sample.orientation;
+            sample.force_n = turn * sample.force_n;
+            sample.torque_nm = turn * sample.torque_nm;
+        }
+        let bias = Vector3::from(demo.truth.sensor_bias_n);
+        demo.truth.sensor_bias_n = (turn * bias).into();
+        demo.truth.surface = match &demo.truth.surface {
+            TruthSurface::Plane { point_m, normal } => TruthSurface::Plane {
+                point_m: (pivot + turn * (Vector3::from(*point_m) - pivot)).into(),
+                normal: (turn * Vector3::from(*normal)).into(),
+            },
+            TruthSurface::Cylinder {
+                axis_point_m,
+                axis,
+                radius_m,
+            } => TruthSurface::Cylinder {
+                axis_point_m: (pivot + turn * (Vector3::from(*axis_point_m) - pivot)).into(),
+                axis: (turn * Vector3::from(*axis)).into(),
+                radius_m: *radius_m,
+            },
+        };
+    }
+}
+
+fn generate_at_1khz(skill: StdSkill, seed: u64, variation: &Variation) -> Demonstration {
     let mut rng = SplitMix64::new(seed);
     let tool = tool();
     let contact_z = SURFACE_Z_M + TIP_RADIUS_M;
@@ -397,47 +500,72 @@ pub fn generate(skill: StdSkill, seed: u64) -> Demonstration {
             let (w1, w3) = (warp_of(&mut rng), warp_of(&mut rng));
             // Four strokes: out, back, out, back, each with its own timing and a sideways bow
             // (a hand does not retrace its path).
-            let strokes: Vec<(f64, f64, f64)> = (0..4)
-                .map(|_| (rng.range(0.9, 1.2), warp_of(&mut rng), rng.range(-0.012, 0.012)))
-                .collect();
+            let draw_strokes = |rng: &mut SplitMix64| -> Vec<(f64, f64, f64)> {
+                (0..4)
+                    .map(|_| (rng.range(0.9, 1.2), warp_of(rng), rng.range(-0.012, 0.012)))
+                    .collect()
+            };
+            let strokes = draw_strokes(&mut rng);
             let settle = 0.25;
-            let wiping_s: f64 = strokes.iter().map(|s| s.0).sum();
-            let contact_s = settle + wiping_s + settle;
             let approach_s = rng.range(1.5, 1.8);
-            let mut at = REST_S + approach_s + settle;
-            for stroke in &strokes[..strokes.len() - 1] {
-                at += stroke.0;
-                turns_s.push(at);
-            }
             let slow_phase = rng.range(0.0, 2.0 * PI);
             let side = Vector3::new(-(c2 - c1).y, (c2 - c1).x, 0.0).normalize();
             phases.push(rest(hover));
             phases.push(moving("approach", approach_s, hover, c1, w1));
-            phases.push(Phase {
-                label: "wipe",
-                duration_s: contact_s,
-                state: Box::new(move |u, t| {
-                    let local = u * contact_s;
-                    let mut begin = settle;
-                    let mut along = 0.0;
-                    let mut bow = 0.0;
-                    for (k, (duration, warp_amount, sway)) in strokes.iter().enumerate() {
-                        if local >= begin {
-                            let progress = min_jerk(warp(((local - begin) / duration).clamp(0.0, 1.0), *warp_amount));
-                            along = if k.is_multiple_of(2) { progress } else { 1.0 - progress };
-                            bow = sway * (PI * progress).sin();
+            let mut at = REST_S + approach_s;
+            let mut pass = |strokes: Vec<(f64, f64, f64)>, level: f64, at: f64, phases: &mut Vec<Phase>| {
+                let wiping_s: f64 = strokes.iter().map(|s| s.0).sum();
+                let contact_s = settle + wiping_s + settle;
+                let mut turn = at + settle;
+                for stroke in &strokes[..strokes.len() - 1] {
+                    turn += stroke.0;
+                    turns_s.push(turn);
+                }
+                phases.push(Phase {
+                    label: "wipe",
+                    duration_s: contact_s,
+                    state: Box::new(move |u, t| {
+                        let local = u * contact_s;
+                        let mut begin = settle;
+                        let mut along = 0.0;
+                        let mut bow = 0.0;
+                        for (k, (duration, warp_amount, sway)) in strokes.iter().enumerate() {
+                            if local >= begin {
+                                let progress =
+                                    min_jerk(warp(((local - begin) / duration).clamp(0.0, 1.0), *warp_amount));
+                                along = if k.is_multiple_of(2) { progress } else { 1.0 - progress };
+                                bow = sway * (PI * progress).sin();
+                            }
+                            begin += duration;
                         }
-                        begin += duration;
-                    }
-                    let position = c1 + (c2 - c1) * along + side * bow;
-                    let force = pressing(local, contact_s, f0, t, slow_phase);
-                    TipState {
-                        position,
-                        normal: up,
-                        normal_force: force,
-                    }
-                }),
-            });
+                        let position = c1 + (c2 - c1) * along + side * bow;
+                        let force = pressing(local, contact_s, level, t, slow_phase);
+                        TipState {
+                            position,
+                            normal: up,
+                            normal_force: force,
+                        }
+                    }),
+                });
+                contact_s
+            };
+            at += pass(strokes, f0, at, &mut phases);
+            // More passes (variants only): lift 4 cm, come back down and wipe again, each pass
+            // at its own force.
+            if variation.passes > 1 {
+                phase_forces_n.push(f0);
+            }
+            for _ in 1..variation.passes {
+                let top = c1 + up * 0.04;
+                let (lift_s, back_s) = (rng.range(0.8, 1.0), rng.range(0.8, 1.0));
+                phases.push(moving("lift", lift_s, c1, top, warp_of(&mut rng)));
+                phases.push(moving("return", back_s, top, c1, warp_of(&mut rng)));
+                at += lift_s + back_s;
+                let strokes = draw_strokes(&mut rng);
+                let level = rng.range(6.0, 14.0);
+                phase_forces_n.push(level);
+                at += pass(strokes, level, at, &mut phases);
+            }
             phases.push(moving("leave", rng.range(1.4, 1.7), c1, leave, w3));
             phases.push(rest(leave));
             surface = TruthSurface::Plane {

@@ -371,7 +371,7 @@ fn mean(values: &[Vector3<f64>]) -> Vector3<f64> {
     values.iter().sum::<Vector3<f64>>() / values.len().max(1) as f64
 }
 
-/// The flange's velocity from positions averaged over [`AVERAGE_S`].
+/// The flange's velocity from positions averaged over [`AVERAGE_S`], differenced across that window.
 struct Motion {
     /// Velocity per sample \[m/s\].
     velocity: Vec<Vector3<f64>>,
@@ -390,9 +390,12 @@ impl Motion {
         let half = ((0.5 * AVERAGE_S * rate).round() as usize).max(1);
         let position = moving_average(&demo.position_m, half);
         let force = moving_average(&demo.force_n, half);
+        // Differences across the averaging window, not between neighbours: averaged positions a
+        // sample apart differ by their noise over 2 ms (0.2 mm of tracker noise at 1 kHz reads
+        // as 3 mm/s and more), a window apart by it over the window.
         let velocity = (0..n)
             .map(|k| {
-                let (a, b) = (k.saturating_sub(1), (k + 1).min(n.saturating_sub(1)));
+                let (a, b) = (k.saturating_sub(half), (k + half).min(n.saturating_sub(1)));
                 let dt = demo.t_s[b] - demo.t_s[a];
                 if dt > 0.0 {
                     (position[b] - position[a]) / dt

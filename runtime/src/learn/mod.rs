@@ -26,6 +26,7 @@
 pub mod constraint;
 pub mod force;
 pub mod ir_seam;
+pub mod phases;
 pub mod segment;
 pub mod strokes;
 

@@ -371,6 +371,59 @@ pub struct Quality {
     /// distance from that plane (docs/method.md §3).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub contacts: Vec<ContactBoundaries>,
+    /// The contact phases of the demonstration and the one learned (docs/method.md §3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phases: Option<PhaseReport>,
+    /// Per frame at a point: the window of first contact whose force it follows (docs/method.md §4).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub onset_frames: BTreeMap<String, OnsetFrame>,
+}
+
+/// The contact phases found in a demonstration and which of them was learned (docs/method.md §3).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct PhaseReport {
+    /// Each phase's onset and release \[s\], in time order.
+    pub phases_s: Vec<[f64; 2]>,
+    /// Each phase's median force magnitude \[N\].
+    pub median_n: Vec<f64>,
+    /// The force noise per axis \[N\] and the on-threshold \[N\] the phases were found with.
+    pub noise_n: f64,
+    /// The on-threshold \[N\] (the off-threshold is half of it).
+    pub on_n: f64,
+    /// The phase learned from (1-based), when the demonstration was cut to one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub learned: Option<usize>,
+    /// Why that phase: `--phase`, `longest`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub chosen_by: String,
+    /// Segment boundaries moved to a contact's onset or release: segment (1-based), which end,
+    /// from and to \[s\].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub moved: Vec<OnsetMove>,
+}
+
+/// A segment boundary moved to a contact's onset or release (docs/method.md §3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OnsetMove {
+    /// The segment whose start moved, 1-based.
+    pub segment: usize,
+    /// `onset` (the segment starts where the contact does) or `release` (where it ends).
+    pub end: String,
+    /// Where segmentation put it and where it is now \[s\].
+    pub from_to_s: [f64; 2],
+}
+
+/// A frame at a point whose force came from the first window in contact (docs/method.md §4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OnsetFrame {
+    /// The window \[s\].
+    pub window_s: [f64; 2],
+    /// Samples averaged.
+    pub samples: usize,
+    /// The mean applied force's magnitude over the window \[N\].
+    pub mean_n: f64,
+    /// RMS angle of the window's force directions about their mean \[°\].
+    pub scatter_deg: f64,
 }
 
 /// A planar contact segment's boundaries before and after the geometric check (docs/method.md §3).

@@ -13,5 +13,5 @@ pub mod validate;
 pub use learn::{learn_skill, LearnError, LearnOptions, DEFAULT_FRICTION_MU};
 pub use learned::{
     ir_hash, ContactBoundaries, FrameKind, FrameOrigin, FramePose, Learned, LearnedForce, LearnedFrame, LearnedMotion,
-    LearnedSegment, NormalCheck, Quality, LEARNED_VERSION,
+    LearnedSegment, NormalCheck, OnsetFrame, OnsetMove, PhaseReport, Quality, LEARNED_VERSION,
 };

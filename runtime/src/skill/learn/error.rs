@@ -22,6 +22,37 @@ pub enum LearnError {
         #[source]
         source: SegmentError,
     },
+    /// `--phase N` (or a task step's `phase: N`) names a contact phase the demonstration does not have.
+    #[error("phase {phase} asked for, but `{source_name}` has {count} contact phase(s){list}")]
+    NoSuchPhase {
+        /// The demonstration.
+        source_name: String,
+        /// The phase asked for (1-based).
+        phase: usize,
+        /// How many there are.
+        count: usize,
+        /// `: 4.10-13.20 s, ...` (empty without phases).
+        list: String,
+    },
+    /// A segment would hold several contact phases and no single phase could be learned instead.
+    #[error(
+        "segment {segment} of `{source_name}` would span {count} contact phases ({list}); \
+         learning phase {longest}, the longest, alone failed too: {reason}; choose one with --phase N"
+    )]
+    PhasesMixed {
+        /// The demonstration.
+        source_name: String,
+        /// The segment that spans them (1-based).
+        segment: usize,
+        /// How many phases there are.
+        count: usize,
+        /// The phases.
+        list: String,
+        /// The longest (1-based).
+        longest: usize,
+        /// Why learning it alone failed.
+        reason: String,
+    },
     /// The segmentation found another number of segments than the template needs.
     #[error("`{method}` found {found} segment(s) in `{source_name}`, the template needs {expected}")]
     SegmentCount {

@@ -89,9 +89,23 @@ impl Learner<'_> {
             }
             ir::FrameSource::ForceAlignedAt { point } => {
                 let index = self.point(*point);
-                let frame =
-                    force_aligned_frame_at(&demo.force_n, &demo.position_m, index, &ForceFrameConfig::default())
-                        .map_err(wrap)?;
+                // The force of the first in-contact window, not of one sample: at a contact's
+                // onset one sample's force is mostly noise (docs/method.md §4).
+                let frame = match super::phases::window_force(demo, self.phases, index) {
+                    Some((mean, report)) => {
+                        self.quality.onset_frames.insert(decl.name.clone(), report);
+                        force_aligned_frame_at(
+                            &[mean],
+                            &demo.position_m[index..=index],
+                            0,
+                            &ForceFrameConfig::default(),
+                        )
+                    }
+                    None => {
+                        force_aligned_frame_at(&demo.force_n, &demo.position_m, index, &ForceFrameConfig::default())
+                    }
+                }
+                .map_err(wrap)?;
                 let pose = Isometry3::from_parts(frame.origin_m.into(), frame.orientation);
                 LearnedFrame::Constant(FramePose::from_isometry(FrameKind::ForceAligned, &pose, None))
             }

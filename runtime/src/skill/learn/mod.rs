@@ -14,6 +14,7 @@ mod error;
 mod forces;
 mod frames;
 mod motions;
+mod phases;
 mod smoothing;
 
 pub use self::error::LearnError;
@@ -43,6 +44,10 @@ pub struct LearnOptions {
     /// The friction coefficient µ that bounds how far the contact force may lean from a fitted
     /// plane's normal, `atan µ` (docs/method.md §4); [`DEFAULT_FRICTION_MU`] when `None`.
     pub friction_mu: Option<f64>,
+    /// The contact phase to learn from (1-based, `--phase N`), when the demonstration has several
+    /// (docs/method.md §3); `None`: all of it, or the longest phase when a segment would span
+    /// several.
+    pub phase: Option<usize>,
 }
 
 /// Forces below this are not contact \[N\].
@@ -67,11 +72,15 @@ pub fn learn_skill(
         keep_bias: options.keep_bias,
     };
     let prepared = prepare(demo, &config, &wrench)?;
-    let demo = prepared.demo;
     let mut warnings = warnings.to_vec();
     warnings.extend(prepared.warnings.iter().map(ToString::to_string));
-    let mut segments = segment(plan, &demo)?;
+    let chosen = phases::choose(plan, prepared.demo, options.phase, |demo| segment(plan, demo))?;
+    let demo = chosen.demo;
+    let mut segments = chosen.segments;
+    let mut phase_report = chosen.report;
+    warnings.extend(chosen.warning);
     let contacts = contact::refine_planar_contacts(plan, &demo, &mut segments, prepared.position_noise_m);
+    phase_report.moved = phases::move_to_onsets(plan, &demo, &mut segments, &chosen.phases);
     let n = demo.len();
     let rate_hz = if demo.duration_s() > 0.0 {
         (n - 1) as f64 / demo.duration_s()
@@ -81,12 +90,14 @@ pub fn learn_skill(
     let mut learner = Learner {
         demo: &demo,
         segments: &segments,
+        phases: &chosen.phases,
         frames: Vec::new(),
         quality: Quality {
             position_noise_m: prepared.position_noise_m,
             smoothing: prepared.smoothing.to_string(),
             wrench: Some(prepared.wrench.clone()),
             contacts,
+            phases: Some(phase_report),
             ..Quality::default()
         },
         smoothing: prepared.smoothing,
@@ -146,6 +157,18 @@ pub fn learn_skill(
     })
 }
 
+/// An error and its sources on one line.
+fn error_text(err: &dyn std::error::Error) -> String {
+    let mut text = err.to_string();
+    let mut source = err.source();
+    while let Some(inner) = source {
+        text.push_str(": ");
+        text.push_str(&inner.to_string());
+        source = inner.source();
+    }
+    text
+}
+
 /// Cuts the demonstration as the plan says and checks the count against the template.
 fn segment(plan: &ir::LearnPlan, demo: &Demo) -> Result<Vec<Segment>, LearnError> {
     let rate_hz = if demo.duration_s() > 0.0 {
@@ -183,6 +206,8 @@ fn segment(plan: &ir::LearnPlan, demo: &Demo) -> Result<Vec<Segment>, LearnError
 struct Learner<'a> {
     demo: &'a Demo,
     segments: &'a [Segment],
+    /// The contact phases of `demo`.
+    phases: &'a [crate::learn::phases::ContactPhase],
     /// Frames learned so far, by `FrameId`, with the start time of the segment per-sample
     /// frames are timed from (0 for constant frames).
     frames: Vec<(LearnedFrame, f64)>,

@@ -97,6 +97,11 @@ pub enum Command {
   skillc learn stdlib-skills/press.skill press.mcap -o press.learned.json --pose-topic /tool_pose --wrench-topic /wrench
   skillc learn stdlib-skills/press.skill bag.mcap -o press.learned.json --tf-parent base --tf-child tool0")]
     Learn(crate::learn_cmd::LearnArgs),
+    /// Which standard templates a demonstration fits, ranked, with the evidence for each.
+    #[command(after_help = "Examples:
+  skillc identify examples/demos/wipe.csv
+  skillc identify demo.csv --format json")]
+    Identify(crate::identify_cmd::IdentifyArgs),
     /// The kinematic rollout of a learned file's motions, in the demonstration's CSV columns.
     #[command(after_help = "Examples:
   skillc rollout press.learned.json -o press.rollout.csv
@@ -210,6 +215,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Dump { stage, file } => dump(&file, stage),
         Command::Demos { out, check } => demos(&out, check, verbosity),
         Command::Learn(args) => crate::learn_cmd::run(&args, verbosity),
+        Command::Identify(args) => crate::identify_cmd::run(&args, verbosity),
         Command::Rollout(args) => crate::learn_cmd::rollout(&args, verbosity),
         Command::Run(args) => crate::run_cmd::run(&args, verbosity),
         Command::Eval(args) => crate::eval::run(&args, verbosity),

@@ -7,6 +7,7 @@ pub mod cli;
 pub mod defaults;
 pub mod eval;
 pub mod frontend;
+pub mod identify_cmd;
 pub mod learn_cmd;
 pub mod limits;
 pub mod load;

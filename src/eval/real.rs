@@ -4,6 +4,7 @@
 //! `segment_labels.csv`), compare the segmentation with the authors' labels, and reproduce
 //! each on a table whose top is the learned plane.
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
@@ -49,6 +50,53 @@ pub struct RealResult {
     pub wrench: Option<String>,
     /// Whether the reproduction started from the file's joint angles.
     pub start_from_demo: bool,
+    /// The contact phases found, onset and release \[s\] from the file's start.
+    pub phases_s: Vec<[f64; 2]>,
+    /// The phase learned (1-based) when the file was cut to one.
+    pub phase_learned: Option<usize>,
+    /// The median applied force along the learned plane's normal over the labelled wipe
+    /// segment (label 2) that overlaps the learned contact most \[N\].
+    pub labelled_median_n: Option<f64>,
+    /// The learned force against it, `learned / median − 1`.
+    pub force_error_rel: Option<f64>,
+}
+
+impl RealResult {
+    /// `phases 1.93-8.05 s; learned phase -; force 20.1 N for a labelled median 21.0 N (-4.3 %)`.
+    pub fn learning_line(&self) -> String {
+        let phases: Vec<String> = self.phases_s.iter().map(|[a, b]| format!("{a:.2}-{b:.2}")).collect();
+        let mut line = format!("{} contact phase(s) [{}] s", phases.len(), phases.join(", "));
+        if let Some(phase) = self.phase_learned {
+            let _ = write!(line, ", learned phase {phase}");
+        }
+        if let (Some(force), Some(median), Some(error)) = (self.force_n, self.labelled_median_n, self.force_error_rel) {
+            let _ = write!(
+                line,
+                "; force {force:.2} N for a labelled median {median:.2} N ({:+.1} %)",
+                error * 100.0
+            );
+        }
+        line
+    }
+}
+
+/// Rows of `segment_labels.csv` for `file`: first and last sample (0-based, inclusive) and label.
+fn label_rows(dir: &Path, file: &str) -> Vec<(usize, usize, String)> {
+    let Ok(text) = std::fs::read_to_string(dir.join("segment_labels.csv")) else {
+        return Vec::new();
+    };
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("file,"))
+        .filter_map(|line| {
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            if fields.len() != 4 || fields[0] != file {
+                return None;
+            }
+            let first = fields[1].parse::<usize>().ok()?.checked_sub(1)?;
+            let last = fields[2].parse::<usize>().ok()?.checked_sub(1)?;
+            Some((first, last, fields[3].to_string()))
+        })
+        .collect()
 }
 
 fn label_boundaries(dir: &Path, file: &str) -> Option<Vec<usize>> {
@@ -110,6 +158,10 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
         peak_force_n: None,
         wrench: None,
         start_from_demo: false,
+        phases_s: Vec::new(),
+        phase_learned: None,
+        labelled_median_n: None,
+        force_error_rel: None,
     };
     let loaded = match read_csv(path, &ReadOptions { min_samples: 30 }) {
         Ok(loaded) => loaded,
@@ -162,6 +214,38 @@ fn one(dir: &Path, path: &Path, skill: &skill_ir::Skill, table_scene: &Path) -> 
     let plane = plane.isometry();
     let z = plane.rotation * Vector3::z();
     result.plane_z = Some([z.x, z.y, z.z]);
+    if let Some(phases) = &learned.quality.phases {
+        result.phases_s = phases.phases_s.iter().map(|[a, b]| [a - t0, b - t0]).collect();
+        result.phase_learned = phases.learned;
+    }
+    // The labelled median: the applied force along the learned normal, the wrench settled as
+    // learning settles it, over the labelled wipe segment nearest the learned contact.
+    if let (Some(contact), Ok(prepared)) = (
+        learned.segments.get(1),
+        skill_runtime::demo::prepare(
+            &demo,
+            &skill_runtime::demo::PreprocessConfig::default(),
+            &skill_runtime::demo::WrenchOptions::default(),
+        ),
+    ) {
+        let overlap = |first: usize, last: usize| {
+            let (a, b) = (demo.t_s[first.min(demo.len() - 1)], demo.t_s[last.min(demo.len() - 1)]);
+            (b.min(contact.end_s) - a.max(contact.start_s)).max(0.0)
+        };
+        let best = label_rows(dir, &file)
+            .into_iter()
+            .filter(|(_, _, label)| label == "2")
+            .max_by(|a, b| overlap(a.0, a.1).total_cmp(&overlap(b.0, b.1)));
+        if let Some((first, last, _)) = best {
+            let last = last.min(prepared.demo.len() - 1);
+            let mut along: Vec<f64> = (first..=last).map(|k| -prepared.demo.force_n[k].dot(&z)).collect();
+            along.sort_by(f64::total_cmp);
+            if let Some(&median) = along.get(along.len() / 2) {
+                result.labelled_median_n = Some(median);
+                result.force_error_rel = result.force_n.map(|f| f / median - 1.0);
+            }
+        }
+    }
 
     // A table whose top is the learned plane, moved along the normal by the probe's length
     // (demonstrations record the flange; the probe tip touches the surface).

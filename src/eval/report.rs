@@ -511,6 +511,7 @@ pub(super) fn real_table(results: &[RealResult]) -> String {
             r.peak_force_n
                 .map_or("-".to_string(), |[peak, bound]| format!("{peak:.1} N of {bound:.1} N"))
         );
+        let _ = writeln!(out, "  {:<14} {}", "", r.learning_line());
         if let Some(wrench) = &r.wrench {
             let _ = writeln!(out, "  {:<14} {wrench}", "");
         }

@@ -136,7 +136,7 @@ pub(crate) fn parent_dir(path: &str) -> String {
 }
 
 /// Joins a path written in a file to that file's directory, lexically (no IO).
-pub(crate) fn join_path(base_dir: &str, path: &str) -> String {
+pub fn join_path(base_dir: &str, path: &str) -> String {
     if path.starts_with('/') || base_dir.is_empty() {
         return path.to_string();
     }

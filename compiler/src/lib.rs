@@ -21,6 +21,7 @@ pub mod units;
 
 pub use check::{ParamSetting, DEFAULT_FORCE_BASIS, DEFAULT_GAINS, DEFAULT_MOTION_BASIS, DEFAULT_STIFFNESS};
 pub use diag::{Code, Diag, Severity};
+pub use import::join_path;
 pub use source::{SourceFile, Span};
 
 use skill_ir as ir;

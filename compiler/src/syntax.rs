@@ -164,7 +164,8 @@ fn named_here(src_text: &str, at: usize, word: &str) -> (&'static str, String) {
 }
 
 /// Words the grammar reserves (they may not be names); keep in step with `keyword` in skill.pest.
-const KEYWORDS: &[&str] = &[
+/// The language server refuses to rename a name to one of them.
+pub const KEYWORDS: &[&str] = &[
     "skill",
     "state",
     "learn",

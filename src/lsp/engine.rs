@@ -63,38 +63,7 @@ pub fn uri(name: &str) -> Option<Uri> {
 }
 
 /// Words a declared name cannot be renamed to: the grammar's keywords.
-pub const KEYWORDS: &[&str] = &[
-    "skill",
-    "state",
-    "learn",
-    "terminal",
-    "task",
-    "step",
-    "fallback",
-    "import",
-    "on",
-    "in",
-    "and",
-    "or",
-    "not",
-    "then",
-    "at",
-    "up",
-    "to",
-    "along",
-    "expect",
-    "from",
-    "within",
-    "control",
-    "move",
-    "apply",
-    "stiffness",
-    "gains",
-    "entry",
-    "extend",
-    "segment",
-    "all",
-];
+pub use skill_compiler::syntax::KEYWORDS;
 
 impl Default for Engine {
     fn default() -> Self {

@@ -593,26 +593,5 @@ pub fn parent_dir(path: &str) -> String {
     }
 }
 
-/// A path written in a file joined to that file's directory, lexically, as the compiler does.
-pub fn join_path(base_dir: &str, path: &str) -> String {
-    if path.starts_with('/') || base_dir.is_empty() {
-        return path.to_string();
-    }
-    let mut parts: Vec<&str> = base_dir.split('/').filter(|p| !p.is_empty() && *p != ".").collect();
-    let absolute = base_dir.starts_with('/');
-    for part in path.split('/') {
-        match part {
-            "" | "." => {}
-            ".." if parts.last().is_some_and(|last| *last != "..") => {
-                parts.pop();
-            }
-            _ => parts.push(part),
-        }
-    }
-    let joined = parts.join("/");
-    if absolute {
-        format!("/{joined}")
-    } else {
-        joined
-    }
-}
+/// A path written in a file joined to that file's directory, lexically: the compiler's rule.
+pub use skill_compiler::join_path;

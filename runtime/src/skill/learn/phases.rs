@@ -190,7 +190,8 @@ fn mixing_segment(segments: &[Segment], phases: &[ContactPhase]) -> Option<usize
 /// Moves segment boundaries next to a contact onto its onset or release: a boundary within
 /// [`MAX_MOVE_S`] of a phase's onset whose next segment is mostly in that phase, or of its
 /// release whose previous segment is. Segments a frame imposes a plane on are left to the
-/// geometric check (`contact.rs`), and a touch's split at the force peak is no contact edge.
+/// geometric check (`contact.rs`), segments learned as `constant(...)` to segmentation, and a
+/// touch's split at the force peak is no contact edge.
 pub(super) fn move_to_onsets(
     plan: &ir::LearnPlan,
     demo: &Demo,
@@ -200,6 +201,9 @@ pub(super) fn move_to_onsets(
     if matches!(plan.segmentation, ir::Segmentation::MaxForce | ir::Segmentation::None) {
         return Vec::new();
     }
+    // Segments a plane is imposed on (the geometric check bounds them) and segments whose force
+    // is `constant(...)`: its steady-region search is tuned to segmentation's cut, and a tap that
+    // gains its touch-down and lift-off ramps learns 5.2 N for 6 N.
     let planar: Vec<usize> = plan
         .frames
         .iter()
@@ -211,6 +215,10 @@ pub(super) fn move_to_onsets(
             }
             _ => None,
         })
+        .chain(plan.forces.iter().filter_map(|decl| match &decl.source {
+            ir::ForceSource::Constant { segment, .. } => Some(segment.index()),
+            _ => None,
+        }))
         .collect();
     let in_phase = |segment: &Segment, phase: &ContactPhase| {
         let overlap = phase

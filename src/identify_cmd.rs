@@ -32,6 +32,8 @@ pub struct IdentifyArgs {
     pub format: String,
 }
 
+/// The fewest samples a demonstration is identified from (a contact phase needs 80 ms).
+const MIN_SAMPLES: usize = 20;
 /// Travel in contact beyond this is sliding \[m\].
 const SLIDING_M: f64 = 0.03;
 /// Travel in contact under this is staying put \[m\].
@@ -135,9 +137,22 @@ pub struct Identification {
 
 /// Identifies the skill a demonstration (read, not yet prepared) shows.
 pub fn identify(demo: &Demo, wrench: &WrenchOptions, demo_name: &str) -> Result<Identification, String> {
+    if demo.len() < MIN_SAMPLES {
+        return Err(format!(
+            "{} sample(s); identifying a skill needs at least {MIN_SAMPLES}",
+            demo.len()
+        ));
+    }
     let prepared = prepare(demo, &PreprocessConfig::default(), wrench).map_err(|err| err.to_string())?;
     let demo = prepared.demo;
     let found = contact_phases(&demo);
+    if found.phases.is_empty() {
+        let peak = demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max);
+        return Err(format!(
+            "no contact phase (the debiased force peaks at {peak:.2} N, under the {:.2} N a contact needs): every standard template learns a contact",
+            found.on_n
+        ));
+    }
     let measures = measure(&demo, &found.phases);
     let mut ranking: Vec<Fit> = TEMPLATES
         .iter()

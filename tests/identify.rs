@@ -44,6 +44,29 @@ fn every_shipped_demonstration_is_its_own_skill() {
 }
 
 #[test]
+fn a_demonstration_without_contact_is_refused() {
+    let dir = std::env::temp_dir().join(format!("skillc-identify-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let shipped = std::fs::read_to_string(root().join("examples/demos/touch.csv")).expect("shipped demo");
+    // The first second of the touch: the free approach only.
+    let free: Vec<&str> = shipped.lines().take(1001).collect();
+    let path = dir.join("free.csv");
+    std::fs::write(&path, free.join("\n") + "\n").expect("write");
+    let output = Command::new(env!("CARGO_BIN_EXE_skillc"))
+        .arg("identify")
+        .arg(&path)
+        .output()
+        .expect("skillc runs");
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("free.csv") && stderr.contains("no contact phase"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}
+
+#[test]
 fn a_missing_file_is_refused_naming_it() {
     let output = Command::new(env!("CARGO_BIN_EXE_skillc"))
         .args(["identify", "no/such/demo.csv"])

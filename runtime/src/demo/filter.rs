@@ -94,6 +94,10 @@ fn filter_even(demo: &Demo, rate_hz: f64, cutoff_hz: f64, order: FilterOrder, wr
             ),
         });
     }
+    if demo.len() < 4 {
+        // Too short to pad and filter: nothing to smooth (and `clamp` below needs 3 ≤ len − 1).
+        return Ok(demo.clone());
+    }
     let section = Biquad::low_pass(cutoff_hz, rate_hz, order);
     let pad = ((3.0 * rate_hz / cutoff_hz).ceil() as usize).clamp(3, demo.len() - 1);
     let mut scratch = Vec::with_capacity(demo.len() + 2 * pad);

@@ -152,7 +152,7 @@ fn a_chosen_phase_is_learned_and_an_absent_one_refused() {
     }
     let err = learn(&wipe, &generated, Some(5)).expect_err("there is no fifth phase");
     let text = err.to_string();
-    assert!(text.contains("phase 5") && text.contains("3 contact phase"), "{text}");
+    assert!(text.contains("`--phase 5`") && text.contains("3 contact phase"), "{text}");
 }
 
 fn normal_of(generated: &Demonstration) -> Vector3<f64> {

@@ -152,7 +152,10 @@ fn a_chosen_phase_is_learned_and_an_absent_one_refused() {
     }
     let err = learn(&wipe, &generated, Some(5)).expect_err("there is no fifth phase");
     let text = err.to_string();
-    assert!(text.contains("`--phase 5`") && text.contains("3 contact phase"), "{text}");
+    assert!(
+        text.contains("`--phase 5`") && text.contains("3 contact phase"),
+        "{text}"
+    );
 }
 
 fn normal_of(generated: &Demonstration) -> Vector3<f64> {
@@ -233,4 +236,48 @@ fn noisy_touches_have_their_frame_within_3_degrees() {
         worst = worst.max(angle);
     }
     assert!(worst < 3.0, "frame {worst}°");
+}
+
+#[test]
+fn learn_prints_the_phases_and_the_one_it_learned() {
+    let generated = generate_varied(
+        StdSkill::Wipe,
+        9,
+        &Variation {
+            passes: 3,
+            ..Variation::default()
+        },
+    );
+    let dir = std::env::temp_dir().join(format!("skillc-phases-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let demo = dir.join("three_passes.csv");
+    std::fs::write(&demo, skill_runtime::demogen::to_csv(&generated)).expect("write");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let run = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_skillc"))
+            .arg("learn")
+            .arg(root.join("stdlib-skills/wipe.skill"))
+            .arg(&demo)
+            .arg("-o")
+            .arg(dir.join("wipe.learned.json"))
+            .args(extra)
+            .output()
+            .expect("skillc runs")
+    };
+    let out = run(&[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("3 contact phases: "), "{stdout}");
+    assert!(stdout.contains("(the longest; --phase N picks another)"), "{stdout}");
+    let out = run(&["--phase", "1"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("learned phase 1 (--phase)"), "{stdout}");
+    let out = run(&["--phase", "4"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("`--phase 4`") && stderr.contains("three_passes.csv"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).expect("clean up");
 }

@@ -275,7 +275,7 @@ pub fn write_run_log(
             };
             bag.put(RunLogTopics::WRENCH, t, &wrench.encode())?;
             if let Some((robot, data)) = kinematics.as_mut() {
-                if tick_index % TF_PERIOD_TICKS == 0 && dof == robot.dof() {
+                if tick_index.is_multiple_of(TF_PERIOD_TICKS) && dof == robot.dof() {
                     robot.forward_kinematics(data, &tick.joint_state[..dof]);
                     let moving: Vec<_> = (0..robot.links().len())
                         .filter(|&link| robot.links()[link].body.is_some())

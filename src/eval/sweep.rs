@@ -231,7 +231,7 @@ pub fn draw(ranges: &SweepRanges, seed: u64, skill: &str, index: usize) -> Draw 
 }
 
 /// How far above every object a sweep's tool starts at least \[m\] (the shipped scenes start it
-/// 1 mm above the surface).
+/// about 6 cm above their surfaces, so only draws that raise the objects that far move it).
 pub const START_CLEARANCE_M: f64 = 0.001;
 
 /// The highest a sweep raises the tool's start \[m\].
@@ -678,6 +678,9 @@ mod scene_tests {
         ] {
             let scene = Scene::from_file(Path::new(file)).expect("shipped scene");
             let robot = Robot::from_urdf_file(&scene.urdf_path(), scene.spec().robot.tool.as_deref()).expect("urdf");
+            let unmoved = RapierPlant::scene_start_clearance(robot.clone(), &scene)
+                .expect("builds")
+                .map_or(1.0, |(d, _)| d);
             for (height_m, tilt_deg) in [(0.066, 3.3), (0.10, -10.0), (0.0, 10.0), (-0.1, 0.0)] {
                 let mut draw = Draw {
                     index: 0,
@@ -700,10 +703,15 @@ mod scene_tests {
                     "{file} {height_m} m {tilt_deg}°: clearance {clearance} m after raising {} m",
                     draw.start_raised_m
                 );
-                if height_m > 0.05 {
+                // Under a table (wide enough that the shift keeps it under the tool) the start
+                // rises by about what the table rises beyond its clearance in the scene as
+                // written (the tilt moves the nearest point by under 2 cm). A shifted button or
+                // drum may leave the tool's column, so there only the clearance is checked.
+                let beyond = height_m - unmoved + START_CLEARANCE_M;
+                if file.ends_with("table.toml") && beyond > 0.02 {
                     assert!(
-                        draw.start_raised_m > height_m - 0.02,
-                        "{file}: raised {} m",
+                        draw.start_raised_m > beyond - 0.02,
+                        "{file}: raised {} m for objects {height_m} m higher, {unmoved} m clear before",
                         draw.start_raised_m
                     );
                 } else if height_m < 0.0 {

@@ -103,9 +103,12 @@ fn a_task_step_limit_sits_between_the_skill_and_the_command_line() {
     let report = run_task(&loosened, &ExecOptions::default());
     assert_eq!(report.outcome, ir::Outcome::Success, "{}", report.message);
 
-    // The command line tightens it again, over the step.
-    let report = run_task(&loosened, &cli("force", 3.5));
-    assert_contact_force_reflex(&report, 3.5);
+    // The command line tightens it again, over the step: the reflex names the command line's
+    // limit, not the step's 60 N nor the skill's 3 N. (2.5 N: since the touch's contact frame
+    // and force come from its first firm-contact window it settles at about 3.3 N, and in this
+    // task's run its peak stays under 3.5 N.)
+    let report = run_task(&loosened, &cli("force", 2.5));
+    assert_contact_force_reflex(&report, 2.5);
 }
 
 /// Where the approach state commanded and measured the tool, tick by tick.

@@ -130,8 +130,10 @@ pub(super) fn choose(
 }
 
 /// How many contact phases a template can take: the number of segments its forces are learned
-/// on (a wipe's one, a double tap's two), at least one. A segment holding two phases is caught
-/// after segmentation too ([`mixing_segment`]).
+/// on (a wipe's one, a double tap's two), or as many as its segments can hold apart when free
+/// and contact segments alternate between an approach and a leave ((N - 1) / 2 of N: a
+/// five-segment tap loop that learns one force for both its taps takes two), at least one. A
+/// segment holding two phases is caught after segmentation too ([`mixing_segment`]).
 pub(super) fn expected_phases(plan: &ir::LearnPlan) -> usize {
     let mut segments: Vec<Option<usize>> = plan
         .forces
@@ -151,7 +153,8 @@ pub(super) fn expected_phases(plan: &ir::LearnPlan) -> usize {
         .collect();
     segments.sort_unstable();
     segments.dedup();
-    segments.len().max(1)
+    let alternating = (plan.segments as usize).saturating_sub(1) / 2;
+    segments.len().max(alternating).max(1)
 }
 
 /// The part of `demo` around phase `index` and the phases inside it, re-indexed.

@@ -174,6 +174,8 @@ pub fn note_input(path: &Path) {
         return;
     };
     let mut inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    // An entry of a file deleted since, whose inode this file now has, is replaced.
+    inputs.retain(|input| input.id != id || still_is(&input.path, &input.id));
     if !inputs.iter().any(|input| input.id == id) {
         inputs.push(Input {
             path: path.to_path_buf(),

@@ -359,7 +359,7 @@ pub fn first_contact_window(demo: &Demo, phase: &ContactPhase) -> std::ops::Rang
     start..end.min(phase.off).max(start + 1)
 }
 
-/// The force the sensor read just before a phase's onset, from [`BASELINE_S`] to 50 ms before
+/// The force the sensor read just before a phase's onset, from 300 ms (`BASELINE_S`) to 50 ms before
 /// it (what debiasing left, or a hand's load), `None` when the onset is too near the start.
 pub fn baseline_before(demo: &Demo, phase: &ContactPhase) -> Option<Vector3<f64>> {
     let end = phase.onset.checked_sub(samples_in(demo, 0.05))?;

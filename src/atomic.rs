@@ -71,12 +71,6 @@ impl FileId {
 enum Temporary {
     File(PathBuf),
     Dir(PathBuf),
-    /// A previous report moved aside while its replacement is moved in: on a signal, put back
-    /// where it was when nothing took its place, else removed.
-    Aside {
-        aside: PathBuf,
-        home: PathBuf,
-    },
 }
 
 /// The temporaries, with a number each so their owner can drop them.
@@ -101,8 +95,8 @@ fn forget_temporary(id: u64) {
     temporaries().retain(|(other, _)| *other != id);
 }
 
-/// Removes every registered temporary (puts a report moved aside back where nothing replaced
-/// it). Called on a signal; also safe to call at any time, it leaves the registry empty.
+/// Removes every registered temporary. Called on a signal; also safe to call at any time, it
+/// leaves the registry empty.
 pub fn remove_temporaries() {
     remove_temporaries_where(|_| true);
 }
@@ -111,7 +105,7 @@ pub fn remove_temporaries() {
 fn remove_temporaries_where(pick: impl Fn(&Path) -> bool) {
     let mut list = temporaries();
     let (picked, kept): (Vec<_>, Vec<_>) = list.drain(..).partition(|(_, temporary)| match temporary {
-        Temporary::File(path) | Temporary::Dir(path) | Temporary::Aside { aside: path, .. } => pick(path),
+        Temporary::File(path) | Temporary::Dir(path) => pick(path),
     });
     *list = kept;
     for (_, temporary) in picked {
@@ -121,13 +115,6 @@ fn remove_temporaries_where(pick: impl Fn(&Path) -> bool) {
             }
             Temporary::Dir(path) => {
                 let _ = std::fs::remove_dir_all(path);
-            }
-            Temporary::Aside { aside, home } => {
-                if std::fs::symlink_metadata(&home).is_err() {
-                    let _ = std::fs::rename(&aside, &home);
-                } else {
-                    let _ = std::fs::remove_dir_all(&aside);
-                }
             }
         }
     }
@@ -349,14 +336,7 @@ fn is_char_device(_meta: &std::fs::Metadata) -> bool {
 
 /// A temporary file beside `target`, then a rename over it.
 fn replace(target: &Path, contents: &[u8], permissions: Option<std::fs::Permissions>) -> std::io::Result<()> {
-    let dir = match target.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = target
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".to_string());
+    let (dir, file_name) = beside(target);
     let tmp = dir.join(temporary_name(&file_name));
     let id = register(Temporary::File(tmp.clone()));
     let result = (|| {
@@ -374,6 +354,19 @@ fn replace(target: &Path, contents: &[u8], permissions: Option<std::fs::Permissi
     }
     forget_temporary(id);
     result
+}
+
+/// The folder `target` lies in (`.` for a bare name) and its file name, where its temporary goes.
+fn beside(target: &Path) -> (PathBuf, String) {
+    let dir = match target.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".to_string());
+    (dir, name)
 }
 
 /// A hidden name beside `name` that no other process or write of this one uses.
@@ -417,14 +410,7 @@ pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) 
         Err(err) if err.kind() == std::io::ErrorKind::NotFound => false,
         Err(err) => return Err(err),
     };
-    let parent = match dir.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".to_string());
+    let (parent, name) = beside(&dir);
     std::fs::create_dir_all(&parent)?;
     let tmp = parent.join(temporary_name(&name));
     let tmp_id = register(Temporary::Dir(tmp.clone()));
@@ -438,6 +424,8 @@ pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) 
         }
     };
     let moved = if existing {
+        // Both renames under the registry's lock: a signal's cleanup waits for them, so it sees
+        // the previous report in place or the new one, and then only a temporary to remove.
         let aside = parent.join(format!(".{name}.old-{}", std::process::id()));
         let mut list = temporaries();
         let moved = std::fs::rename(&dir, &aside).and_then(|()| {
@@ -448,13 +436,7 @@ pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) 
         list.retain(|(other, _)| *other != tmp_id);
         let aside_id = NEXT_TEMPORARY.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         if moved.is_ok() {
-            list.push((
-                aside_id,
-                Temporary::Aside {
-                    aside: aside.clone(),
-                    home: dir.clone(),
-                },
-            ));
+            list.push((aside_id, Temporary::Dir(aside.clone())));
         }
         drop(list);
         if moved.is_ok() {

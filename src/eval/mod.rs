@@ -451,11 +451,12 @@ const THREADS_PER_CORE: usize = 4;
 fn worker_threads(requested: Option<usize>, trials: usize, verbosity: Verbosity) -> usize {
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
     let wanted = requested.filter(|n| *n > 0).unwrap_or(cores);
-    let most = (cores * THREADS_PER_CORE).min(trials.max(1));
+    let (per_core, trials) = (cores * THREADS_PER_CORE, trials.max(1));
+    let most = per_core.min(trials);
     if wanted > most && requested.is_some() {
         verbosity.note(format_args!(
             "--threads {wanted}: running {most} worker threads ({}; trials are CPU-bound)",
-            if most == trials.max(1) && trials.max(1) < cores * THREADS_PER_CORE {
+            if trials < per_core {
                 format!("one per trial, {trials} trials")
             } else {
                 format!("at most {THREADS_PER_CORE} per core, {cores} cores")
@@ -1158,8 +1159,6 @@ fn run_sweep(
     finish_sweep(&args.out, &summary, args.min_success, verbosity)
 }
 
-/// Prints and writes a sweep's (or merged sweeps') report; exit 1 when a skill's success rate is
-/// below `min_success`.
 /// The fingerprint of a sweep's inputs: every file it read and the settings that change a draw.
 fn sweep_fingerprint(args: &EvalArgs) -> String {
     let settings = format!(
@@ -1173,6 +1172,8 @@ fn sweep_fingerprint(args: &EvalArgs) -> String {
     crate::defaults::fnv(settings.as_bytes())
 }
 
+/// Prints and writes a sweep's (or merged sweeps') report; exit 1 when a skill's success rate is
+/// below `min_success`.
 fn finish_sweep(
     out: &Path,
     summary: &sweep::SweepSummary,
@@ -1206,7 +1207,6 @@ fn finish_sweep(
 /// after its report is written.
 fn merge(out: &Path, min_success: f64, summaries: &[PathBuf], verbosity: Verbosity) -> Result<u8, Failure> {
     let mut parts = Vec::new();
-    let mut paths = Vec::new();
     for given in summaries {
         let path = if given.is_dir() {
             given.join("summary.json")
@@ -1232,10 +1232,9 @@ fn merge(out: &Path, min_success: f64, summaries: &[PathBuf], verbosity: Verbosi
             ))
         })?;
         parts.push((path.display().to_string(), part));
-        paths.push(path);
     }
-    let inputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
-    crate::atomic::refuse_inputs(&out.join("summary.json"), "--out", &inputs).map_err(Failure::Usage)?;
+    // The summaries are noted inputs: an `--out` that is one of them is refused here.
+    crate::atomic::refuse_inputs(&out.join("summary.json"), "--out", &[]).map_err(Failure::Usage)?;
     let merged = sweep::merge(parts).map_err(Failure::Input)?;
     let code = finish_sweep(out, &merged.summary, min_success, verbosity)?;
     if !merged.missing.is_empty() {

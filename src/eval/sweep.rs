@@ -445,8 +445,8 @@ fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
-/// Joins the summaries of a sweep's shares. They must come from the same sweep (version, seed,
-/// draws per skill, ranges) and hold no draw twice.
+/// Joins the summaries of a sweep's shares. They must come from the same sweep (its identity,
+/// seed, draws per skill, ranges), each share once, each holding exactly the draws it runs.
 pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<Merged, String> {
     let mut parts = parts.into_iter();
     let Some((first_name, mut merged)) = parts.next() else {
@@ -495,7 +495,9 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<Merged, String> {
                     part.partitions.join(", ")
                 ));
             }
-            found.insert(key);
+            if !found.insert(key.clone()) {
+                return Err(format!("`{name}` holds draw #{} of `{}` twice", key.1, key.0));
+            }
         }
         if let Some((skill, index)) = expected.difference(&found).next() {
             return Err(format!(
@@ -520,20 +522,8 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<Merged, String> {
         Ok(())
     };
     note_shares(&first_name, check(&first_name, &merged)?)?;
-    let mut seen: std::collections::BTreeSet<(String, usize)> = std::collections::BTreeSet::new();
-    let mut remember = |name: &str, trials: &[TrialResult]| -> Result<(), String> {
-        for trial in trials {
-            let index = trial.draw.map_or(usize::MAX, |d| d.index);
-            if !seen.insert((trial.skill.clone(), index)) {
-                return Err(format!(
-                    "`{name}` repeats draw #{index} of `{}`: the shares overlap (each needs its own --partition K/M)",
-                    trial.skill
-                ));
-            }
-        }
-        Ok(())
-    };
-    remember(&first_name, &merged.trials)?;
+    // Shares of one split run disjoint draws, and each share holds exactly its own once
+    // (`check`), so no draw can stand twice in the merge.
     for (name, part) in parts {
         let shares = check(&name, &part)?;
         if part.seed != merged.seed || part.per_skill != merged.per_skill || part.ranges != merged.ranges {
@@ -557,7 +547,6 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<Merged, String> {
             }
         }
         note_shares(&name, shares)?;
-        remember(&name, &part.trials)?;
         merged.partitions.extend(part.partitions);
         merged.elapsed_s += part.elapsed_s;
         merged.trials.extend(part.trials);

@@ -375,10 +375,7 @@ fn first_screen(outcomes: &[Outcome], skills: &[SkillView<'_>], tasks: &[TaskVie
             .filter(|o| o.result.skill == name && o.result.mode == mode)
             .collect();
         let passed = trials.iter().filter(|o| o.result.success && !o.result.error).count();
-        let worst_rms = trials
-            .iter()
-            .filter_map(|o| o.result.force_rms_rel)
-            .fold(None, |worst: Option<f64>, v| Some(worst.map_or(v, |w| w.max(v))));
+        let worst_rms = trials.iter().filter_map(|o| o.result.force_rms_rel).reduce(f64::max);
         // The worst peak is the one nearest its bound (or furthest past it).
         let worst_peak = trials
             .iter()

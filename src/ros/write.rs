@@ -231,12 +231,15 @@ pub fn write_run_log(
         )?;
         let mut data = robot.data();
         robot.forward_kinematics(&mut data, &vec![0.0; robot.dof()]);
-        let fixed: Vec<_> = (0..robot.links().len())
-            .filter(|&link| robot.links()[link].body.is_none())
+        // Links no joint moves go on /tf_static once, the others on /tf.
+        let (fixed, moving): (Vec<usize>, Vec<usize>) =
+            (0..robot.links().len()).partition(|&link| robot.links()[link].body.is_none());
+        let fixed: Vec<_> = fixed
+            .into_iter()
             .map(|link| link_transform(first_t, &robot.links()[link].name, &robot.link_in_base(&data, link)))
             .collect();
         bag.put(RunLogTopics::TF_STATIC, first_t, &super::msgs::encode_tf(&fixed))?;
-        kinematics = Some((robot, data));
+        kinematics = Some((robot, data, moving));
     }
     let mut tick_index = 0usize;
     let mut offset_s = 0.0;
@@ -274,12 +277,12 @@ pub fn write_run_log(
                 torque: [-w[3], -w[4], -w[5]],
             };
             bag.put(RunLogTopics::WRENCH, t, &wrench.encode())?;
-            if let Some((robot, data)) = kinematics.as_mut() {
+            if let Some((robot, data, moving_links)) = kinematics.as_mut() {
                 if tick_index.is_multiple_of(TF_PERIOD_TICKS) && dof == robot.dof() {
                     robot.forward_kinematics(data, &tick.joint_state[..dof]);
-                    let moving: Vec<_> = (0..robot.links().len())
-                        .filter(|&link| robot.links()[link].body.is_some())
-                        .map(|link| link_transform(t, &robot.links()[link].name, &robot.link_in_base(data, link)))
+                    let moving: Vec<_> = moving_links
+                        .iter()
+                        .map(|&link| link_transform(t, &robot.links()[link].name, &robot.link_in_base(data, link)))
                         .collect();
                     bag.put(RunLogTopics::TF, t, &super::msgs::encode_tf(&moving))?;
                 }

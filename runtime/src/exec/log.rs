@@ -189,24 +189,20 @@ fn push_fixed(out: &mut Vec<u8>, value: f64, precision: usize) {
         at -= 1;
         buffer[at] = b'.';
     }
-    loop {
-        if rest >= 10 {
-            let pair = (rest % 100) as usize * 2;
-            rest /= 100;
-            at -= 2;
-            buffer[at..at + 2].copy_from_slice(&PAIRS[pair..pair + 2]);
-            if rest == 0 {
-                // A pair of 0X wrote a leading zero: drop it.
-                if buffer[at] == b'0' {
-                    at += 1;
-                }
-                break;
-            }
-        } else {
-            at -= 1;
-            buffer[at] = b'0' + rest as u8;
-            break;
-        }
+    // The integer part: pairs while three or more digits are left, then the last one or two.
+    while rest >= 100 {
+        let pair = (rest % 100) as usize * 2;
+        rest /= 100;
+        at -= 2;
+        buffer[at..at + 2].copy_from_slice(&PAIRS[pair..pair + 2]);
+    }
+    if rest >= 10 {
+        let pair = rest as usize * 2;
+        at -= 2;
+        buffer[at..at + 2].copy_from_slice(&PAIRS[pair..pair + 2]);
+    } else {
+        at -= 1;
+        buffer[at] = b'0' + rest as u8;
     }
     out.extend_from_slice(&buffer[at..]);
 }

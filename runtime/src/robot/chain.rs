@@ -230,8 +230,6 @@ fn held_value(joint: &urdf_rs::Joint) -> f64 {
 /// silently. Linear in the text.
 pub(super) fn check_numbers(text: &str, file: &str) -> Result<(), RobotError> {
     let bytes = text.as_bytes();
-    let mut line = 1;
-    let mut counted = 0;
     let mut element_start = None;
     let mut i = 0;
     while i < bytes.len() {
@@ -256,7 +254,7 @@ pub(super) fn check_numbers(text: &str, file: &str) -> Result<(), RobotError> {
                     let overflows =
                         token.parse::<f64>().is_ok_and(f64::is_infinite) && word != "inf" && word != "infinity";
                     if overflows {
-                        line += bytes[counted..i].iter().filter(|b| **b == b'\n').count();
+                        let line = 1 + bytes[..i].iter().filter(|b| **b == b'\n').count();
                         let before = &text[element_start.unwrap_or(i)..i];
                         let element = before
                             .split(|c: char| c.is_whitespace() || c == '/')
@@ -281,10 +279,6 @@ pub(super) fn check_numbers(text: &str, file: &str) -> Result<(), RobotError> {
                 i += len + 2;
                 continue;
             }
-            b'\n' if element_start.is_none() => {
-                line += bytes[counted..=i].iter().filter(|b| **b == b'\n').count();
-                counted = i + 1;
-            }
             _ => {}
         }
         i += 1;
@@ -297,13 +291,14 @@ pub(super) fn check_numbers(text: &str, file: &str) -> Result<(), RobotError> {
 fn link_inertial(link: &urdf_rs::Link, on_base: bool, notes: &mut Vec<String>) -> Result<Inertial, RobotError> {
     match inertial(link) {
         Ok((inertial, _)) => {
-            if !on_base && inertial.mass == 0.0 && inertial.inertia.iter().any(|v| *v != 0.0) {
+            let massless_tensor = inertial.mass == 0.0 && inertial.inertia.iter().any(|v| *v != 0.0);
+            if !on_base && massless_tensor {
                 notes.push(format!(
                     "link `{}` has zero mass but an inertia tensor: its inertia is lumped as given into the body it is fixed to",
                     link.name
                 ));
             }
-            if on_base && inertial.mass == 0.0 && inertial.inertia.iter().any(|v| *v != 0.0) {
+            if on_base && massless_tensor {
                 notes.push(format!(
                     "link `{}` is fixed to the base, so its inertial values are ignored (zero mass with an inertia tensor)",
                     link.name

@@ -184,8 +184,7 @@ fn read_bag(path: &Path, bag: &BagOptions) -> Result<(Loaded, Vec<String>, Optio
     use crate::ros::BagError;
     let read = crate::ros::read_demo(path, bag).map_err(|err| match &err {
         BagError::Io { .. } => Failure::Usage(error_chain(&err)),
-        // A folder that is not a rosbag2 bag is a path given wrongly, not a bad bag.
-        BagError::Folder { .. } if !path.join("metadata.yaml").is_file() => Failure::Usage(error_chain(&err)),
+        BagError::NotABag { .. } => Failure::Usage(error_chain(&err)),
         _ => Failure::Input(error_chain(&err)),
     })?;
     let provenance = format!(

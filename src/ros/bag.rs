@@ -54,9 +54,7 @@ pub(super) fn bag_files(path: &Path) -> Result<Vec<PathBuf>, BagError> {
                 many[0].display()
             ),
         };
-        return Err(folder_error(format!(
-            "is a folder without `metadata.yaml`, so not a rosbag2 bag{hint}"
-        )));
+        return Err(BagError::NotABag { dir, hint });
     }
     let text = std::fs::read_to_string(&metadata_path).map_err(|source| BagError::Io {
         file: metadata_path.display().to_string(),

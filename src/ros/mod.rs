@@ -194,12 +194,21 @@ pub enum BagError {
         /// Where: ``, the chunk after message 24 of the file (`/wrench` message 12, counting from 1)``.
         place: String,
     },
-    /// A folder that is not a rosbag2 bag skillc can read.
+    /// A folder given as a demonstration that is no rosbag2 bag at all (no `metadata.yaml`):
+    /// a path given wrongly, as any folder where a file is expected.
+    #[error("`{dir}` is a folder without `metadata.yaml`, so not a rosbag2 bag{hint}")]
+    NotABag {
+        /// Path of the folder.
+        dir: String,
+        /// What to pass instead: ``: pass the bag file `x/take.mcap` itself``.
+        hint: String,
+    },
+    /// A rosbag2 folder skillc cannot read.
     #[error("`{dir}` {reason}")]
     Folder {
         /// Path of the folder.
         dir: String,
-        /// What is wrong and what to do: ``is a folder without `metadata.yaml` …``.
+        /// What is wrong and what to do: ``is a rosbag2 bag stored as `sqlite3` …``.
         reason: String,
     },
     /// The file is not MCAP, or its records are corrupt (after `messages` good messages).

@@ -371,6 +371,9 @@ fn summary_under(heading: &str, report: &RunReport, log: &RunLog) -> String {
         "  safety: peak force {:.1} N, peak tool speed {:.3} m/s, smallest joint margin {:.3} rad, {:.3} s at a torque limit",
         safety.peak_force_n, safety.peak_tool_speed_mps, safety.min_joint_margin_rad, safety.torque_limit_s
     );
+    if let Some(audit) = &report.contact {
+        let _ = writeln!(out, "  {}", audit.summary());
+    }
     let status = match report.outcome {
         skill_ir::Outcome::Success => "success",
         skill_ir::Outcome::Failure => "FAILURE",
@@ -498,14 +501,9 @@ fn run_task(
     if let Some(path) = &args.output {
         let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), run.ticks());
     }
-    let last = run.steps.last().map(|r| r.report.clone()).unwrap_or(RunReport {
-        outcome,
-        terminal: None,
-        message: String::new(),
-        visits: Vec::new(),
-        duration_s: 0.0,
-        reflex: None,
-        safety: Default::default(),
-    });
+    let last = run
+        .steps
+        .last()
+        .map_or_else(|| RunReport::not_started(String::new()), |step| step.report.clone());
     Ok((RunReport { outcome, ..last }, text))
 }

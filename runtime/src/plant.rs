@@ -98,6 +98,119 @@ pub trait Plant {
 
     /// Advances the plant by `dt` seconds (1 ms in skillc).
     fn step(&mut self, dt: f64) -> Result<(), PlantError>;
+
+    /// What the plant's contact witness found since the last call (and starts it afresh): a
+    /// simulation checks every step's contact force on the tool against the analytic distance
+    /// between the tool and the scene's shapes. `None` for plants without one (a real arm, the
+    /// model-based test plant).
+    fn take_contact_audit(&mut self) -> Option<ContactAudit> {
+        None
+    }
+}
+
+/// A simulation's contact force checked against its geometry, tick by tick (docs/method.md §7):
+/// a force on the tool only where the tool is within [`ContactAudit::FORCE_FREE_BEYOND_M`] of an
+/// object, and never deeper into one than the contact's compliance explains
+/// (`|F| / k` plus [`ContactAudit::DEPTH_SLACK_M`]).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ContactAudit {
+    /// Steps checked.
+    pub ticks: u64,
+    /// Steps with a force on the tool above [`ContactAudit::FORCE_N`].
+    pub touching_ticks: u64,
+    /// Steps with a force while the tool was farther than [`ContactAudit::FORCE_FREE_BEYOND_M`]
+    /// from every object.
+    pub far_ticks: u64,
+    /// The largest such force.
+    pub far_force: Option<ContactFinding>,
+    /// Steps in which the tool was deeper in an object than its compliance explains.
+    pub deep_ticks: u64,
+    /// The deepest such step (the largest depth beyond what the force explains).
+    pub too_deep: Option<ContactFinding>,
+    /// The deepest the tool went into any object, m (0 if it never did).
+    pub max_depth_m: f64,
+    /// The largest force on the tool, N.
+    pub max_force_n: f64,
+}
+
+/// One step the witness names.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ContactFinding {
+    /// Plant time, s.
+    pub t_s: f64,
+    /// The force on the tool, N (noise-free).
+    pub force_n: f64,
+    /// The tool's distance to the nearest object, m (negative inside it).
+    pub gap_m: f64,
+    /// What the force explains: the depth `|F| / k` plus the slack, m (for depth findings).
+    pub allowed_m: f64,
+    /// The nearest object's name.
+    pub object: String,
+    /// The tool point (the tool link's origin) then, base frame, m.
+    pub tool_m: [f64; 3],
+}
+
+impl ContactAudit {
+    /// A force below this is no force, N.
+    pub const FORCE_N: f64 = 0.01;
+    /// Farther than this from every object, the tool feels no force, m.
+    pub const FORCE_FREE_BEYOND_M: f64 = 1e-3;
+    /// Depth allowed beyond what the contact's compliance explains, m.
+    pub const DEPTH_SLACK_M: f64 = 1e-3;
+
+    /// Whether the contacts broke either rule.
+    pub fn violated(&self) -> bool {
+        self.far_ticks > 0 || self.deep_ticks > 0
+    }
+
+    /// Adds `other` (a later stretch of the same run).
+    pub fn merge(&mut self, other: ContactAudit) {
+        let larger = |a: Option<ContactFinding>, b: Option<ContactFinding>, key: fn(&ContactFinding) -> f64| match (a, b) {
+            (Some(a), Some(b)) => Some(if key(&b) > key(&a) { b } else { a }),
+            (a, b) => a.or(b),
+        };
+        self.ticks += other.ticks;
+        self.touching_ticks += other.touching_ticks;
+        self.far_ticks += other.far_ticks;
+        self.deep_ticks += other.deep_ticks;
+        self.far_force = larger(self.far_force.take(), other.far_force, |f| f.force_n);
+        self.too_deep = larger(self.too_deep.take(), other.too_deep, |f| -f.gap_m - f.allowed_m);
+        self.max_depth_m = self.max_depth_m.max(other.max_depth_m);
+        self.max_force_n = self.max_force_n.max(other.max_force_n);
+    }
+
+    /// One line for a run's output: what was checked and what broke.
+    pub fn summary(&self) -> String {
+        let mut text = format!(
+            "contact witness: {} steps checked, {} in contact (peak {:.1} N, deepest {:.2} mm)",
+            self.ticks,
+            self.touching_ticks,
+            self.max_force_n,
+            self.max_depth_m * 1e3
+        );
+        if let Some(far) = &self.far_force {
+            text += &format!(
+                "; {} steps with force away from every object, worst {:.2} N at t = {:.3} s with the tool {:.1} mm from `{}`",
+                self.far_ticks,
+                far.force_n,
+                far.t_s,
+                far.gap_m * 1e3,
+                far.object
+            );
+        }
+        if let Some(deep) = &self.too_deep {
+            text += &format!(
+                "; {} steps deeper than the compliance explains, worst {:.2} mm into `{}` at t = {:.3} s under {:.1} N (allowed {:.2} mm)",
+                self.deep_ticks,
+                -deep.gap_m * 1e3,
+                deep.object,
+                deep.t_s,
+                deep.force_n,
+                deep.allowed_m * 1e3
+            );
+        }
+        text
+    }
 }
 
 /// Saturates `torques` at ±effort per joint, writing into `out`.

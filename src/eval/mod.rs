@@ -316,7 +316,7 @@ pub struct TrialResult {
     /// How the run ended, or why it could not run.
     pub message: String,
     /// Why the trial failed, short and stable (`reflex:contact_force`, `criterion:force_rms`,
-    /// `criterion:peak_force`, `failure_state`, `error`, ...); `None` when it succeeded.
+    /// `contact_witness`, `criterion:peak_force`, `lost_contact`, `failure_state`, `error`, ...); `None` when it succeeded.
     pub reason: Option<String>,
     /// The peak force the trial was allowed \[N\] (skill trials).
     pub peak_bound_n: Option<f64>,
@@ -339,6 +339,10 @@ pub struct TrialResult {
     /// A task trial's steps, in order (then any fallback that ran); empty for skill trials.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub steps: Vec<tasks::StepResult>,
+    /// What the simulation's contact witness found over every step of the run (a task's steps
+    /// together); `None` when the trial did not run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<skill_runtime::plant::ContactAudit>,
 }
 
 /// A learned skill ready for trials (it binds), or why it is not.
@@ -407,6 +411,7 @@ impl Outcome {
                 draw: None,
                 set,
                 steps: Vec::new(),
+                contact: None,
             },
             log: RunLog::default(),
             step_logs: Vec::new(),
@@ -662,16 +667,16 @@ fn run_job(
     let peak_bound = (!replay).then(|| criteria.peak_bound(prepared.demo_peak_n));
     // The first reason a trial fails, in order of gravity. Replays are the baseline: they are
     // never a success, and their reason says why they would have failed.
-    let reason = if let Some(violation) = &report.reflex {
-        Some(format!("reflex:{}", violation.quantity.name()))
-    } else if report.outcome != skill_ir::Outcome::Success {
-        Some("failure_state".to_string())
-    } else {
-        let demo_peak = (!replay).then_some(prepared.demo_peak_n);
-        criteria
-            .missed(&metrics, learned_force, demo_peak)
-            .map(|(reason, _)| reason)
-    };
+    let reason = run_reason(&report).or_else(|| {
+        if report.outcome != skill_ir::Outcome::Success {
+            Some("failure_state".to_string())
+        } else {
+            let demo_peak = (!replay).then_some(prepared.demo_peak_n);
+            criteria
+                .missed(&metrics, learned_force, demo_peak)
+                .map(|(reason, _)| reason)
+        }
+    });
     let success = !replay && reason.is_none();
     let safety = &report.safety;
     Outcome {
@@ -690,6 +695,7 @@ fn run_job(
             message: report.message.clone(),
             reason,
             peak_bound_n: peak_bound,
+            contact: report.contact.clone(),
             peak_tool_speed_mps: safety.peak_tool_speed_mps,
             min_joint_margin_rad: safety.min_joint_margin_rad,
             torque_limit_s: safety.torque_limit_s,
@@ -948,9 +954,10 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
     say(
         verbosity,
         &format!(
-            "{table}{} trials in {elapsed:.1} s\n{}\n",
+            "{table}{} trials in {elapsed:.1} s\n{}\n{}\n",
             outcomes.len(),
-            pass_line(&outcomes)
+            pass_line(&outcomes),
+            witness_line(&outcomes)
         ),
     )?;
     let real = match &args.real {
@@ -1006,6 +1013,56 @@ fn evaluate(args: &EvalArgs, verbosity: Verbosity) -> Result<u8, Failure> {
         }
     }
     Ok(u8::from(any_failed))
+}
+
+/// What the contact witness found over every trial: steps checked, steps in contact, steps
+/// that broke its rules, and the deepest the tool went into an object (with the trial).
+fn witness_line(outcomes: &[Outcome]) -> String {
+    let mut all = skill_runtime::plant::ContactAudit::default();
+    let mut deepest: Option<(f64, &TrialResult)> = None;
+    let mut trials = 0;
+    for result in outcomes.iter().map(|o| &o.result) {
+        let Some(audit) = &result.contact else { continue };
+        trials += 1;
+        if deepest.is_none_or(|(depth, _)| audit.max_depth_m > depth) {
+            deepest = Some((audit.max_depth_m, result));
+        }
+        all.merge(audit.clone());
+    }
+    let broken = outcomes
+        .iter()
+        .filter(|o| o.result.contact.as_ref().is_some_and(|audit| audit.violated()))
+        .count();
+    let mut line = format!(
+        "contact witness: {} steps of {trials} trials checked against the shapes, {} in contact; {} with force away from \
+         every object, {} deeper than the compliance explains ({broken} trials)",
+        all.ticks, all.touching_ticks, all.far_ticks, all.deep_ticks
+    );
+    if let Some((depth, result)) = deepest.filter(|(depth, _)| *depth > 0.0) {
+        line.push_str(&format!(
+            "; deepest {:.2} mm ({} {}, {})",
+            depth * 1e3,
+            result.skill,
+            result.variant,
+            result.mode
+        ));
+    }
+    line
+}
+
+/// The first reason a run itself gives for failing, in order of gravity, before any criterion
+/// is looked at: contacts that are not where the shapes are (every other figure of the run is
+/// suspect then), a reflex, a contact lost mid-stroke.
+pub(crate) fn run_reason(report: &skill_runtime::exec::RunReport) -> Option<String> {
+    if report.contact.as_ref().is_some_and(|audit| audit.violated()) {
+        Some(skill_runtime::exec::CONTACT_WITNESS.to_string())
+    } else if let Some(violation) = &report.reflex {
+        Some(format!("reflex:{}", violation.quantity.name()))
+    } else if report.lost_contact() {
+        Some(skill_runtime::exec::LOST_CONTACT.to_string())
+    } else {
+        None
+    }
 }
 
 /// `N/M skill trials pass`, and `K/L task trials pass` when there are task trials.

@@ -75,7 +75,7 @@ pub struct StepResult {
     pub duration_s: f64,
     /// How the step ended.
     pub message: String,
-    /// Why it failed (`reflex:...`, `terminal:NAME`, `anchor`, `criterion:...`, `not_run`);
+    /// Why it failed (`contact_witness`, `reflex:...`, `lost_contact`, `terminal:NAME`, `anchor`, `criterion:...`, `not_run`);
     /// `None` when it succeeded.
     pub reason: Option<String>,
     /// States visited with entry times, `state@t`.
@@ -514,6 +514,13 @@ fn judge(
         None => format!("all {} steps succeeded", results.len()),
     };
     let peak_force_n = results.iter().map(|r| r.peak_force_n).fold(0.0, f64::max);
+    let contact = reports
+        .iter()
+        .filter_map(|report| report.report.contact.clone())
+        .reduce(|mut all, step| {
+            all.merge(step);
+            all
+        });
     Outcome {
         result: TrialResult {
             skill: prepared.name.clone(),
@@ -538,6 +545,7 @@ fn judge(
             draw: None,
             set: sets,
             steps: results,
+            contact,
         },
         log: RunLog::default(),
         step_logs: logs,
@@ -559,8 +567,8 @@ fn judge_step(
     let peak_bound = criteria.peak_bound(learned.demo_peak_n);
     let run = &report.report;
     // The first reason the step fails, in the skill trials' order, with what was measured.
-    let (reason, detail) = if let Some(violation) = &run.reflex {
-        (Some(format!("reflex:{}", violation.quantity.name())), None)
+    let (reason, detail) = if let Some(reason) = super::run_reason(run) {
+        (Some(reason), None)
     } else if run.visits.is_empty() && task_step.step.at.is_some() {
         // `at: STEP.STATE` not found: the step failed before it moved (the message says which).
         (Some("anchor".to_string()), None)

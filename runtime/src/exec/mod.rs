@@ -32,5 +32,5 @@ pub use bind::{bind, BindError, BoundSkill};
 pub use limits::{apply_limits, learned_peak_force, learned_workspace, limits_for};
 pub use log::{JointValues, RunLog, Tick, MAX_INLINE_DOF};
 pub use rig::Rig;
-pub use run::{replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit};
+pub use run::{replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit, CONTACT_WITNESS, LOST_CONTACT};
 pub use session::{scene_controller, simulate, simulate_task, Mode, SessionError, StepReport, TaskRun, TaskStep};

@@ -12,7 +12,7 @@ use super::machine::{LostContact, Machine, Sensed};
 use super::motion::{motion_start, motions_in_order, MotionRollout};
 use super::rig::Rig;
 use crate::control::Command;
-use crate::plant::PlantError;
+use crate::plant::{ContactAudit, PlantError};
 use crate::robot::RobotError;
 use crate::safety::{SafetyStats, Violation};
 use crate::skill::Learned;
@@ -141,6 +141,8 @@ pub struct RunReport {
     pub reflex: Option<Violation>,
     /// Peak force and speed, smallest joint margin, time at the torque limit.
     pub safety: SafetyStats,
+    /// The plant's contact witness over the run (`None` for plants without one).
+    pub contact: Option<ContactAudit>,
 }
 
 impl RunReport {
@@ -154,9 +156,19 @@ impl RunReport {
             duration_s: 0.0,
             reflex: None,
             safety: SafetyStats::default(),
+            contact: None,
         }
     }
+
+    /// Whether the run failed because the contact was lost mid-stroke (the message
+    /// [`lost_contact_message`] writes).
+    pub fn lost_contact(&self) -> bool {
+        self.outcome == ir::Outcome::Failure && self.message.starts_with(LOST_CONTACT)
+    }
 }
+
+/// The word a lost-contact failure's message starts with, and the reason eval gives it.
+pub const LOST_CONTACT: &str = "lost_contact";
 
 /// The name of the replay state that covers `segment` (0-based): `replay:<motion>` for the
 /// segment's learned motion (the first by name), `replay:segment <n>` (1-based) without one.
@@ -262,13 +274,18 @@ fn arm_supervisor(
     })?;
     rig.set_limits(limits);
     rig.reset_safety_stats();
+    // The witness counts this run's steps only.
+    rig.plant.take_contact_audit();
     Ok(rig.time_s())
 }
 
-/// Turns a run's result into its report: a reflex becomes a failure, the safety figures are added.
+/// Turns a run's result into its report: a reflex becomes a failure, the safety figures and the
+/// contact witness's findings are added, and a run whose contacts broke the witness's rules is a
+/// failure (`contact_witness`): its forces were not where the geometry is, so its verdict would
+/// claim nothing about the world.
 fn finish(
     result: Result<RunReport, ExecError>,
-    rig: &Rig<'_>,
+    rig: &mut Rig<'_>,
     mut visits: Vec<Visit>,
     start_s: f64,
     location_of: impl Fn(&str) -> Option<String>,
@@ -287,6 +304,7 @@ fn finish(
             duration_s,
             reflex,
             safety: SafetyStats::default(),
+            contact: None,
         }
     };
     let mut report = match result {
@@ -305,8 +323,19 @@ fn finish(
         Err(other) => return Err(other),
     };
     report.safety = rig.safety_stats().clone();
+    report.contact = rig.plant.take_contact_audit();
+    if let Some(audit) = report.contact.as_ref().filter(|audit| audit.violated()) {
+        if report.outcome == ir::Outcome::Success {
+            report.outcome = ir::Outcome::Failure;
+            report.terminal = None;
+            report.message = format!("{CONTACT_WITNESS}: the simulated contacts are not where the shapes are; {}", audit.summary());
+        }
+    }
     Ok(report)
 }
+
+/// The word a failure of the contact witness's rules starts with, and the reason eval gives it.
+pub const CONTACT_WITNESS: &str = "contact_witness";
 
 fn skill_loop(
     bound: &BoundSkill<'_>,
@@ -347,6 +376,7 @@ fn skill_loop(
                 duration_s: t - start_s,
                 reflex: None,
                 safety: SafetyStats::default(),
+                contact: None,
             });
         }
         if t - run_start > options.max_duration_s {
@@ -365,6 +395,7 @@ fn skill_loop(
                 duration_s: t - start_s,
                 reflex: None,
                 safety: SafetyStats::default(),
+                contact: None,
             });
         }
         let active = machine.active().expect("terminal states returned above");
@@ -404,6 +435,7 @@ fn skill_loop(
                     duration_s: t - start_s,
                     reflex: None,
                     safety: SafetyStats::default(),
+                    contact: None,
                 });
             }
             continue;
@@ -419,6 +451,7 @@ fn skill_loop(
                 duration_s: t - start_s,
                 reflex: None,
                 safety: SafetyStats::default(),
+                contact: None,
             });
         }
 
@@ -444,7 +477,7 @@ fn lost_contact_message(lost: &LostContact, state: &str, location: &str, start_s
         ),
     };
     format!(
-        "lost_contact: the contact was lost at t = {:.3} s in state `{state}` ({location}), the tool at \
+        "{LOST_CONTACT}: the contact was lost at t = {:.3} s in state `{state}` ({location}), the tool at \
          ({:.3}, {:.3}, {:.3}) m with {left}: the force along the desired {:.1} N stayed below half of it \
          for {:.0} ms (now {:.1} N, the tool at ({:.3}, {:.3}, {:.3}) m)",
         lost.since_s - start_s,
@@ -555,5 +588,6 @@ fn replay_loop(
         duration_s: rig.time_s() - start_s,
         reflex: None,
         safety: SafetyStats::default(),
+        contact: None,
     })
 }

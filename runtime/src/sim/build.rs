@@ -13,7 +13,7 @@ use rapier3d::prelude::{
 
 use super::convert::{mass_properties, pose_of, pose_of_quat, quat, rpy_pose, vec3, z_to_y};
 use super::rapier_plant::{RapierOptions, RapierPlant};
-use super::{ObjectKind, Scene};
+use super::{ObjectShape, Scene};
 use crate::robot::Shape;
 
 /// A spring-loaded button in the simulation.
@@ -186,9 +186,8 @@ impl RapierPlant {
                     .restitution(0.0)
                     .collision_groups(groups)
             };
-            match object.kind {
-                ObjectKind::Box => {
-                    let size = object.size.unwrap_or([0.1; 3]);
+            match object.shape() {
+                ObjectShape::Box { size } => {
                     let body = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
                     let collider = material(ColliderBuilder::cuboid(
                         size[0] as Real / 2.0,
@@ -198,13 +197,10 @@ impl RapierPlant {
                     let handle = self.colliders.insert_with_parent(collider, body, &mut self.bodies);
                     self.object_colliders.push((handle, name.clone()));
                 }
-                ObjectKind::Cylinder => {
+                ObjectShape::Cylinder { radius, length } => {
                     let body = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
                     let collider = material(
-                        ColliderBuilder::cylinder(
-                            object.length.unwrap_or(0.1) as Real / 2.0,
-                            object.radius.unwrap_or(0.1) as Real,
-                        )
+                        ColliderBuilder::cylinder(length as Real / 2.0, radius as Real)
                         // Its contacts are found anew every step like every pair's (no
                         // recycling, see `RapierPlant`): a probe sliding over the drum follows its
                         // curve, not a frozen tangent plane.
@@ -213,11 +209,9 @@ impl RapierPlant {
                     let handle = self.colliders.insert_with_parent(collider, body, &mut self.bodies);
                     self.object_colliders.push((handle, name.clone()));
                 }
-                ObjectKind::Button => {
-                    let radius = object.radius.unwrap_or(0.02) as Real;
-                    let height = object.height.unwrap_or(0.02) as Real;
+                ObjectShape::Button { radius, height, travel } => {
+                    let (radius, height, travel) = (radius as Real, height as Real, travel as Real);
                     let mass = object.mass.unwrap_or(0.02) as Real;
-                    let travel = object.travel.unwrap_or(0.01) as Real;
                     let housing = self.bodies.insert(RigidBodyBuilder::fixed().pose(pose));
                     let cap = self.bodies.insert(
                         RigidBodyBuilder::dynamic()

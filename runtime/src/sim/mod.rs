@@ -9,8 +9,9 @@ mod free_flight;
 mod rapier_plant;
 mod scene;
 mod sensor;
+mod witness;
 
 pub use convert::SIM_F64;
 pub use rapier_plant::{joint_positions, RapierOptions, RapierPlant, SimError, StepCounts};
-pub use scene::{ObjectKind, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec, ToolStart};
+pub use scene::{ObjectKind, ObjectShape, ObjectSpec, RobotSpec, Scene, SceneError, SceneSpec, SimSpec, ToolStart};
 pub use sensor::{SensorConfig, WristSensor};

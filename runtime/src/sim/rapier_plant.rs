@@ -15,8 +15,9 @@ use rapier3d::prelude::{
 use super::build::Button;
 use super::convert::{iso_of, vec3};
 use super::free_flight::{FreeFlight, World};
+use super::witness::{StepState, Witness};
 use super::{Scene, SceneError, SensorConfig, WristSensor};
-use crate::plant::{saturate, Observation, Plant, PlantError};
+use crate::plant::{saturate, ContactAudit, Observation, Plant, PlantError};
 use crate::robot::{JointKind, Robot, RobotError};
 
 /// Why a simulation could not be built.
@@ -186,6 +187,8 @@ pub struct RapierPlant {
     /// How many steps rapier took, and how many the plant took in free flight.
     pub(super) steps_rapier: u64,
     pub(super) steps_free: u64,
+    /// The contact witness (`None` only while a step checks it).
+    pub(super) witness: Option<Witness>,
 }
 
 /// How deep a start may put a collider inside an object \[m\]: rapier's contact slop.
@@ -277,6 +280,7 @@ impl RapierPlant {
                 reason: format!("sensor link `{}` does not move with the arm", spec.robot.sensor),
             });
         };
+        let witness = Witness::new(&robot, sensor_link, scene);
         let mut plant = RapierPlant {
             pipeline: PhysicsPipeline::new(),
             params: IntegrationParameters {
@@ -376,6 +380,7 @@ impl RapierPlant {
             rapier_stepped: false,
             steps_rapier: 0,
             steps_free: 0,
+            witness: Some(witness),
             robot,
         };
         plant.build_arm(&q0, sensor_link, options);
@@ -633,6 +638,24 @@ impl RapierPlant {
         ))
     }
 
+    /// Checks the step just taken against the scene's geometry ([`Witness`]).
+    fn witness_check(&mut self) {
+        let Some(mut witness) = self.witness.take() else { return };
+        let link_pose = |link: usize| self.link_pose(link);
+        let depth = |name: &str| self.button_depth(name).unwrap_or(0.0);
+        let tool = self
+            .link_pose(self.robot.tool_link())
+            .map_or_else(nalgebra::Vector3::zeros, |pose| pose.translation.vector);
+        witness.check(&StepState {
+            t_s: self.t,
+            force: self.ideal_wrench_base.fixed_rows::<3>(0).into_owned(),
+            link_pose: &link_pose,
+            depth: &depth,
+            tool,
+        });
+        self.witness = Some(witness);
+    }
+
     /// The first joint whose position or velocity is not finite (what [`Plant::observe_into`]
     /// would report), without allocating an observation.
     fn first_non_finite_joint(&self) -> Option<usize> {
@@ -834,6 +857,7 @@ impl Plant for RapierPlant {
         if self.free_step(dt) {
             self.t += dt;
             self.steps_free += 1;
+            self.witness_check();
             return Ok(());
         }
         self.land();
@@ -864,7 +888,12 @@ impl Plant for RapierPlant {
                 joint: self.robot.joints()[idx].name.clone(),
             });
         }
+        self.witness_check();
         Ok(())
+    }
+
+    fn take_contact_audit(&mut self) -> Option<ContactAudit> {
+        self.witness.as_mut().map(Witness::take)
     }
 }
 

@@ -208,6 +208,61 @@ fn default_friction() -> f64 {
     0.5
 }
 
+/// An object's shape with every default filled in, as the simulation builds it (in the object's
+/// frame, [`ObjectSpec::pose`]; cylinders and button caps along its z axis).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ObjectShape {
+    /// A box of full extents `size`, m (default 0.1 m each).
+    Box {
+        /// Full extents along x, y, z, m.
+        size: [f64; 3],
+    },
+    /// A cylinder (default radius 0.1 m, length 0.1 m).
+    Cylinder {
+        /// Radius, m.
+        radius: f64,
+        /// Length, m.
+        length: f64,
+    },
+    /// A button's cap at rest (default radius 0.02 m, height 0.02 m, travel 0.01 m).
+    Button {
+        /// Cap radius, m.
+        radius: f64,
+        /// Cap height, m.
+        height: f64,
+        /// Travel from rest to the lower stop, m.
+        travel: f64,
+    },
+}
+
+impl ObjectSpec {
+    /// The object's shape, defaults filled in.
+    pub fn shape(&self) -> ObjectShape {
+        match self.kind {
+            ObjectKind::Box => ObjectShape::Box {
+                size: self.size.unwrap_or([0.1; 3]),
+            },
+            ObjectKind::Cylinder => ObjectShape::Cylinder {
+                radius: self.radius.unwrap_or(0.1),
+                length: self.length.unwrap_or(0.1),
+            },
+            ObjectKind::Button => ObjectShape::Button {
+                radius: self.radius.unwrap_or(0.02),
+                height: self.height.unwrap_or(0.02),
+                travel: self.travel.unwrap_or(0.01),
+            },
+        }
+    }
+
+    /// The object's frame in the world (= robot base) frame: `xyz`, then `rpy` (URDF convention).
+    pub fn pose(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(self.xyz[0], self.xyz[1], self.xyz[2]),
+            UnitQuaternion::from_euler_angles(self.rpy[0], self.rpy[1], self.rpy[2]),
+        )
+    }
+}
+
 /// A whole scene file, typed.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -1,14 +1,20 @@
-//! The skillc runtime: learning from a demonstration, the robot model, the hybrid controller and the simulation.
+//! The skillc runtime: learning from a demonstration, the robot model, the hybrid controller and
+//! the simulation, under one roof. Each room is a crate of its own (`skill-robot`, `skill-model`,
+//! `skill-learn`, `skill-sim`, `skill-exec`) so that a controller process links neither the
+//! simulator nor the learner and a plant process links no learner; this crate re-exports them at
+//! their old paths and adds what needs two rooms at once: a simulated run ([`exec::simulate`]).
 #![warn(missing_docs)]
-pub mod control;
-pub mod demo;
-pub mod demogen;
-pub mod dmp;
-pub mod exec;
-pub mod learn;
-pub mod plant;
-pub mod rng;
-pub mod robot;
-pub mod safety;
-pub mod sim;
-pub mod skill;
+pub use skill_exec::{control, safety};
+pub use skill_learn::{demo, demogen, learn, rng, skill};
+pub use skill_model::dmp;
+pub use skill_robot::{plant, robot};
+pub use skill_sim::sim;
+
+/// The skill engine ([`skill_exec::exec`]) and simulated runs of it ([`simulate`],
+/// [`simulate_task`]).
+pub mod exec {
+    pub use skill_exec::exec::*;
+
+    mod session;
+    pub use session::{scene_controller, simulate, simulate_task, Mode, SessionError, StepReport, TaskRun, TaskStep};
+}

@@ -1,9 +1,9 @@
 //! One simulated run from files' worth of inputs: a scene, a bound skill (or a replay), options.
 //! Used by `skillc run` and `skillc eval`.
 
-use super::log::csv;
-use super::motion::offset_to_place;
-use super::{run_replay, run_skill, BoundSkill, ExecError, ExecOptions, Rig, RunLog, RunReport};
+use super::{
+    logs_csv as csv, offset_to_place, run_replay, run_skill, BoundSkill, ExecError, ExecOptions, Rig, RunLog, RunReport,
+};
 use crate::control::{ControllerGains, HybridController};
 use crate::plant::Plant;
 use crate::robot::RobotError;

@@ -1,0 +1,85 @@
+//! The runtime's crates are layered one way (ARCHITECTURE.md): a controller process (the skill
+//! engine, `skill-exec`) links neither the simulator nor the learner, and a plant process
+//! (`skill-sim`) links no learner. Read from the manifests, transitively over the workspace's
+//! own crates, so a dependency added in the wrong room fails here.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// Every workspace crate of the runtime, by folder.
+const CRATES: [(&str, &str); 6] = [
+    ("skill-robot", "robot"),
+    ("skill-model", "model"),
+    ("skill-learn", "learn"),
+    ("skill-sim", "sim"),
+    ("skill-exec", "exec"),
+    ("skill-runtime", "runtime"),
+];
+
+/// Each crate's normal (not dev) dependencies, by name.
+fn manifests() -> BTreeMap<String, BTreeSet<String>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    CRATES
+        .iter()
+        .map(|(name, folder)| {
+            let path = root.join(folder).join("Cargo.toml");
+            let text = std::fs::read_to_string(&path).unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+            let manifest: toml::Table = toml::from_str(&text).unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+            let package = manifest["package"]["name"].as_str().expect("a package name");
+            assert_eq!(package, *name, "{}", path.display());
+            let deps = manifest
+                .get("dependencies")
+                .and_then(toml::Value::as_table)
+                .map(|table| table.keys().cloned().collect())
+                .unwrap_or_default();
+            (name.to_string(), deps)
+        })
+        .collect()
+}
+
+/// Everything `name` links: its dependencies, and theirs among the workspace's crates.
+fn links(manifests: &BTreeMap<String, BTreeSet<String>>, name: &str) -> BTreeSet<String> {
+    let mut seen = BTreeSet::new();
+    let mut todo = vec![name.to_string()];
+    while let Some(next) = todo.pop() {
+        for dep in manifests.get(&next).into_iter().flatten() {
+            if seen.insert(dep.clone()) {
+                todo.push(dep.clone());
+            }
+        }
+    }
+    seen
+}
+
+#[test]
+fn the_controller_links_neither_simulator_nor_learner_and_the_plant_no_learner() {
+    let manifests = manifests();
+    let exec = links(&manifests, "skill-exec");
+    for banned in ["skill-sim", "skill-learn", "rapier3d", "csv"] {
+        assert!(!exec.contains(banned), "skill-exec links {banned}: {exec:?}");
+    }
+    assert!(exec.contains("skill-robot") && exec.contains("skill-model"), "{exec:?}");
+    let sim = links(&manifests, "skill-sim");
+    for banned in ["skill-learn", "skill-exec", "skill-model"] {
+        assert!(!sim.contains(banned), "skill-sim links {banned}: {sim:?}");
+    }
+    assert!(sim.contains("rapier3d"), "{sim:?}");
+    let robot = links(&manifests, "skill-robot");
+    assert!(
+        robot.iter().all(|dep| !dep.starts_with("skill-")),
+        "skill-robot depends on no other room: {robot:?}"
+    );
+    let model = links(&manifests, "skill-model");
+    for banned in ["skill-robot", "skill-learn", "skill-sim", "skill-exec", "rapier3d"] {
+        assert!(!model.contains(banned), "skill-model links {banned}: {model:?}");
+    }
+    let learn = links(&manifests, "skill-learn");
+    for banned in ["skill-sim", "skill-exec", "rapier3d"] {
+        assert!(!learn.contains(banned), "skill-learn links {banned}: {learn:?}");
+    }
+    // The one place two rooms meet.
+    let runtime = links(&manifests, "skill-runtime");
+    for needed in ["skill-sim", "skill-exec", "skill-learn"] {
+        assert!(runtime.contains(needed), "{runtime:?}");
+    }
+}

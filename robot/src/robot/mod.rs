@@ -3,8 +3,8 @@
 //!
 //! Typical hot-loop use, without allocation:
 //! ```
-//! # use skill_runtime::robot::Robot;
-//! # let robot = Robot::from_urdf_str(skill_runtime::robot::LWR4_URDF, None).expect("bundled urdf");
+//! # use skill_robot::robot::Robot;
+//! # let robot = Robot::from_urdf_str(skill_robot::robot::LWR4_URDF, None).expect("bundled urdf");
 //! let mut data = robot.data();
 //! let mut jacobian = nalgebra::Matrix6xX::zeros(robot.dof());
 //! let mut gravity = vec![0.0; robot.dof()];

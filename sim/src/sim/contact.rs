@@ -12,8 +12,10 @@ use super::convert::{from_vec3, iso_of};
 use super::rapier_plant::RapierPlant;
 
 impl RapierPlant {
-    /// Sums the contact wrenches on the tool colliders about the sensor origin (base axes).
-    pub(super) fn contact_wrench(&self) -> Vector6<f64> {
+    /// Sums the contact wrenches on the tool colliders about the sensor origin (base axes), and
+    /// the normal of the tool's contacts with fixed objects (their normals on the tool weighted
+    /// by their normal impulses; `None` without such contact).
+    pub(super) fn contact_wrench(&self) -> (Vector6<f64>, Option<Vector3<f64>>) {
         let sensor_origin = self
             .bodies
             .get(self.links[self.sensor_body])
@@ -22,6 +24,7 @@ impl RapierPlant {
         let inv_dt = 1.0 / f64::from(self.params.dt);
         let mut force = Vector3::zeros();
         let mut moment = Vector3::zeros();
+        let mut normals = Vector3::zeros();
         for tool in &self.tool_colliders {
             for pair in self.narrow_phase.contact_pairs_with(*tool) {
                 let PairContacts::Rigid(rigid) = &pair.contacts else {
@@ -32,9 +35,20 @@ impl RapierPlant {
                     continue;
                 };
                 let tool_pose = tool_collider.position();
+                let other = if tool_is_first { pair.collider2 } else { pair.collider1 };
+                let fixed = self
+                    .colliders
+                    .get(other)
+                    .and_then(|c| c.parent())
+                    .and_then(|body| self.bodies.get(body))
+                    .is_some_and(|body| body.is_fixed());
                 for manifold in rigid.solver_manifolds() {
                     let normal = from_vec3(manifold.data.normal);
+                    let normal_on_tool = if tool_is_first { -normal } else { normal };
                     for point in &manifold.points {
+                        if fixed {
+                            normals += normal_on_tool * f64::from(point.data.impulse);
+                        }
                         // rapier's impulses act on the first collider along the normal that points
                         // from the first to the second: the push on the first is −n λ.
                         let on_first = -(normal * f64::from(point.data.impulse)
@@ -52,7 +66,11 @@ impl RapierPlant {
                 }
             }
         }
-        Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
+        let normal = (normals.norm() > 0.0).then(|| normals.normalize());
+        (
+            Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z),
+            normal,
+        )
     }
 
     /// Sums the contact forces on each arm link that is not the tool (base axes) into
@@ -114,7 +132,8 @@ impl RapierPlant {
     /// gathers the arm links' contact forces.
     pub(super) fn sense_contacts(&mut self, dt: f64) {
         self.sense_arm_contacts();
-        let ideal = self.contact_wrench();
+        let (ideal, normal) = self.contact_wrench();
+        self.tool_normal = normal;
         self.read_sensor(ideal, self.sensor_rotation(), dt);
     }
 

@@ -9,6 +9,7 @@ mod free_flight;
 mod rapier_plant;
 mod scene;
 mod sensor;
+mod stiffness;
 mod witness;
 
 pub use convert::SIM_F64;

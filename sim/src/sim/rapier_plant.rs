@@ -15,6 +15,7 @@ use rapier3d::prelude::{
 use super::build::Button;
 use super::convert::{iso_of, vec3};
 use super::free_flight::{FreeFlight, World};
+use super::stiffness::ContactTuner;
 use super::witness::{StepState, Witness};
 use super::{Scene, SceneError, SensorConfig, WristSensor};
 use crate::plant::{saturate, ContactAudit, Observation, Plant, PlantError};
@@ -189,6 +190,13 @@ pub struct RapierPlant {
     pub(super) steps_free: u64,
     /// The contact witness (`None` only while a step checks it).
     pub(super) witness: Option<Witness>,
+    /// The normal on the tool of its last step's contacts with fixed objects.
+    pub(super) tool_normal: Option<nalgebra::Vector3<f64>>,
+    /// Sets the contact frequency from the effective mass along that normal.
+    pub(super) tuner: ContactTuner,
+    /// Joint positions and velocities, scratch for the tuner.
+    pub(super) q_scratch: Vec<f64>,
+    pub(super) qd_scratch: Vec<f64>,
 }
 
 /// How deep a start may put a collider inside an object \[m\]: rapier's contact slop.
@@ -381,6 +389,10 @@ impl RapierPlant {
             steps_rapier: 0,
             steps_free: 0,
             witness: Some(witness),
+            tool_normal: None,
+            tuner: ContactTuner::new(&robot, spec.sim.contact_stiffness),
+            q_scratch: vec![0.0; n],
+            qd_scratch: vec![0.0; n],
             robot,
         };
         plant.build_arm(&q0, sensor_link, options);
@@ -638,6 +650,21 @@ impl RapierPlant {
         ))
     }
 
+    /// Gives the coming step's contacts with fixed objects the scene's stiffness along the last
+    /// contact normal ([`ContactTuner`]); without a contact the frequency stays as it was.
+    fn tune_contact_stiffness(&mut self) {
+        let Some(normal) = self.tool_normal else { return };
+        let (mut q, mut qd) = (
+            std::mem::take(&mut self.q_scratch),
+            std::mem::take(&mut self.qd_scratch),
+        );
+        self.read_joint_state(&mut q, &mut qd);
+        if let Some(hz) = self.tuner.frequency_hz(&self.robot, &q, &normal) {
+            self.params.static_contact_softness.natural_frequency = hz as Real;
+        }
+        (self.q_scratch, self.qd_scratch) = (q, qd);
+    }
+
     /// Checks the step just taken against the scene's geometry ([`Witness`]).
     fn witness_check(&mut self) {
         let Some(mut witness) = self.witness.take() else { return };
@@ -865,6 +892,7 @@ impl Plant for RapierPlant {
         self.steps_rapier += 1;
         self.gate_joint_limits();
         self.apply_joint_torques();
+        self.tune_contact_stiffness();
         self.pipeline.step(
             self.gravity,
             &self.params,

@@ -10,8 +10,8 @@ pub use skill_model::dmp;
 pub use skill_robot::{plant, robot};
 pub use skill_sim::sim;
 
-/// The skill engine ([`skill_exec::exec`]) and simulated runs of it ([`simulate`],
-/// [`simulate_task`]).
+/// The skill engine ([`skill_exec::exec`]) and simulated runs of it ([`simulate`](crate::exec::simulate),
+/// [`simulate_task`](crate::exec::simulate_task)).
 pub mod exec {
     pub use skill_exec::exec::*;
 

@@ -160,8 +160,8 @@ impl RunReport {
         }
     }
 
-    /// Whether the run failed because the contact was lost mid-stroke (the message
-    /// [`lost_contact_message`] writes).
+    /// Whether the run failed because the contact was lost mid-stroke (its message starts
+    /// with [`LOST_CONTACT`]).
     pub fn lost_contact(&self) -> bool {
         self.outcome == ir::Outcome::Failure && self.message.starts_with(LOST_CONTACT)
     }

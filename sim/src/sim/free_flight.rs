@@ -393,10 +393,7 @@ impl FreeFlight {
     fn gap_beyond(&self, margin: f64) -> Result<f64, f64> {
         let mut gap = f64::INFINITY;
         for bound in &self.bounds {
-            let (rot, pos) = (
-                &*self.data.body_rotation(bound.body),
-                &*self.data.body_position(bound.body),
-            );
+            let (rot, pos) = (self.data.body_rotation(bound.body), self.data.body_position(bound.body));
             let center = rot * bound.center + pos;
             for object in &self.objects {
                 let outside = (object.min - center).sup(&(center - object.max)).sup(&Vector3::zeros());

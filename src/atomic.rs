@@ -29,6 +29,7 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Symlinks followed before giving up (the kernel's own limit is 40).
 const MAX_LINKS: usize = 40;
@@ -128,7 +129,11 @@ pub fn install_signal_cleanup() -> std::io::Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
     std::thread::Builder::new().name("signals".into()).spawn(move || {
-        if let Some(signal) = signals.forever().next() {
+        for signal in signals.forever() {
+            if GRACEFUL.load(Ordering::SeqCst) && !STOP_REQUESTED.swap(true, Ordering::SeqCst) {
+                // A serving command stops at its next tick; a second signal exits at once.
+                continue;
+            }
             remove_temporaries();
             // The registry's lock is held from here on, so no temporary is made after
             // the cleanup.
@@ -137,6 +142,19 @@ pub fn install_signal_cleanup() -> std::io::Result<()> {
         }
     })?;
     Ok(())
+}
+
+/// Set by a command that stops by itself on a signal ([`stop_on_signal`]).
+static GRACEFUL: AtomicBool = AtomicBool::new(false);
+/// Set by the first signal while [`GRACEFUL`].
+static STOP_REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// Makes the first SIGINT, SIGTERM or SIGHUP set the flag returned instead of exiting, so a
+/// command that serves until stopped (`skillc plant`) can finish its tick, close its session and
+/// report; a second signal exits as before.
+pub fn stop_on_signal() -> &'static AtomicBool {
+    GRACEFUL.store(true, Ordering::SeqCst);
+    &STOP_REQUESTED
 }
 
 /// No signals to handle off Unix; temporaries are removed as their writes end.

@@ -114,6 +114,13 @@ pub enum Command {
   skillc run stdlib-skills/press.skill --learned press.learned.json --scene examples/scenes/button.toml -o press.log.mcap
   skillc run stdlib-skills/slide.skill --learned slide.learned.json --scene examples/scenes/table.toml --replay")]
     Run(crate::run_cmd::RunArgs),
+    /// Serve the simulated arm of a scene to runs and ROS 2 tools in other processes, over Zenoh
+    /// (docs/split.md).
+    #[command(after_help = "Examples:
+  skillc plant --scene examples/scenes/table.toml --listen tcp/127.0.0.1:7447
+  skillc run stdlib-skills/slide.skill --demo examples/demos/slide.csv --scene examples/scenes/table.toml --plant tcp/127.0.0.1:7447 --lockstep
+  skillc plant --scene examples/scenes/button.toml --set button.x=0.52 --listen tcp/0.0.0.0:7447 --domain 3")]
+    Plant(crate::link::PlantArgs),
     /// Run the thesis's experiments: learn each skill, reproduce it in changed scenes beside the
     /// replay baseline, and write a report with tables and plots.
     #[command(after_help = "Examples:
@@ -218,6 +225,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Identify(args) => crate::identify_cmd::run(&args, verbosity),
         Command::Rollout(args) => crate::learn_cmd::rollout(&args, verbosity),
         Command::Run(args) => crate::run_cmd::run(&args, verbosity),
+        Command::Plant(args) => crate::link::plant(&args, verbosity),
         Command::Eval(args) => crate::eval::run(&args, verbosity),
         Command::Robot(args) => crate::robot_cmd::run(&args),
         Command::Completions { shell } => completions(shell),

@@ -10,6 +10,7 @@ pub mod frontend;
 pub mod identify_cmd;
 pub mod learn_cmd;
 pub mod limits;
+pub mod link;
 pub mod load;
 pub mod lsp;
 pub mod out;

@@ -3,13 +3,15 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use skill_runtime::exec::{bind, simulate, simulate_task, BoundSkill, ExecOptions, Mode, RunLog, RunReport, TaskStep};
+use skill_runtime::exec::{
+    bind, run_on_plant, run_task_on_plant, simulate, simulate_task, BoundSkill, ExecOptions, Mode, RunLog, RunReport,
+    SessionError, TaskStep,
+};
 use skill_runtime::skill::{LearnOptions, Learned};
 
 use crate::atomic;
-use crate::load::{
-    error_chain, learn_from_files, learn_from_source, load_scene, load_skill_with, read_learned, Failure,
-};
+use crate::link::scene_with_robot;
+use crate::load::{error_chain, learn_from_files, learn_from_source, load_skill_with, read_learned, Failure};
 use crate::out::Verbosity;
 use crate::plot::{self, Plot, Subject, Trial};
 use skill_runtime::demo::Dialect;
@@ -81,6 +83,33 @@ pub struct RunArgs {
     /// angular_speed, joint_margin, joint_speed, saturation, tracking, tracking_angle, arm_contact (repeatable).
     #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = parse_limit)]
     pub limits: Vec<(String, f64)>,
+    /// Run on this shipped robot (`lwr4`, `iiwa14`) instead of the scene's, its tool starting
+    /// where the scene's robot starts its tool.
+    #[arg(long, value_name = "NAME")]
+    pub robot: Option<String>,
+    /// The plant in another process (`skillc plant`).
+    #[command(flatten)]
+    pub link: crate::link::LinkArgs,
+}
+
+/// Runs on the plant `--plant` names (`remote`), or simulates here (`here`); the link's line
+/// when the run printed one.
+fn on_plant_or_here<T>(
+    scene: &skill_runtime::sim::Scene,
+    link: &crate::link::LinkArgs,
+    remote: impl FnOnce(&mut dyn skill_runtime::plant::Plant) -> Result<T, SessionError>,
+    here: impl FnOnce() -> Result<T, SessionError>,
+) -> Result<(T, Option<String>), Failure> {
+    let Some(endpoint) = &link.plant else {
+        return Ok((here().map_err(|err| Failure::Input(error_chain(&err)))?, None));
+    };
+    #[cfg(feature = "zenoh")]
+    return crate::link::run_remote(scene, link, endpoint, remote);
+    #[cfg(not(feature = "zenoh"))]
+    {
+        let _ = (scene, endpoint, remote);
+        Err(crate::link::without_zenoh())
+    }
 }
 
 /// Parses `NAME=VALUE` for `--limit`, checking the name and that the value is positive.
@@ -180,7 +209,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
             ))
         }
     };
-    let scene = load_scene(&args.scene, &args.sets)?;
+    let scene = scene_with_robot(&args.scene, &args.sets, args.robot.as_deref())?;
     refuse_noted_output(args)?;
     let options = ExecOptions {
         overrides: skill_ir::Overrides {
@@ -198,11 +227,19 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     } else {
         Mode::Skill(&bound)
     };
-    let (report, log) = simulate(&scene, mode, &options).map_err(|err| Failure::Input(error_chain(&err)))?;
+    let ((report, log), link_line) = on_plant_or_here(
+        &scene,
+        &args.link,
+        |plant| run_on_plant(&scene, plant, mode, &options),
+        || simulate(&scene, mode, &options),
+    )?;
     if let Some(path) = &args.output {
         write_log(path, &[(None, &log)], &scene, || log.to_csv())?;
     }
     let mut text = summary(&skill.name, args.replay, &report, &log);
+    if let Some(line) = link_line {
+        let _ = writeln!(text, "  {line}");
+    }
     if let Some(path) = &args.output {
         let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), log.ticks.len());
     }
@@ -427,7 +464,7 @@ fn run_task(
     program: &skill_ir::Program,
     task: &skill_ir::Task,
 ) -> Result<(RunReport, String), Failure> {
-    let scene = load_scene(&args.scene, &args.sets)?;
+    let scene = scene_with_robot(&args.scene, &args.sets, args.robot.as_deref())?;
     // The steps' demonstrations and learned files are inputs too: refuse an output that is one
     // of them before learning anything.
     for step in task.steps.iter().chain(&task.fallbacks) {
@@ -448,17 +485,17 @@ fn run_task(
         .collect::<Result<_, _>>()?;
     let steps = bind_all(&task.steps, &prepared)?;
     let fallbacks = bind_all(&task.fallbacks, &prepared_fallbacks)?;
-    let run = simulate_task(
+    let options = ExecOptions {
+        limits: args.limits.clone(),
+        prepose: !args.no_prepose,
+        ..ExecOptions::default()
+    };
+    let (run, link_line) = on_plant_or_here(
         &scene,
-        &steps,
-        &fallbacks,
-        &ExecOptions {
-            limits: args.limits.clone(),
-            prepose: !args.no_prepose,
-            ..ExecOptions::default()
-        },
-    )
-    .map_err(|err| Failure::Input(error_chain(&err)))?;
+        &args.link,
+        |plant| run_task_on_plant(&scene, plant, &steps, &fallbacks, &options),
+        || simulate_task(&scene, &steps, &fallbacks, &options),
+    )?;
     if let Some(path) = &args.output {
         let logs: Vec<(Option<&str>, &RunLog)> = run
             .steps
@@ -498,6 +535,9 @@ fn run_task(
         skill_ir::Outcome::Failure => "TASK FAILED",
     };
     let _ = writeln!(text, "{status}");
+    if let Some(line) = link_line {
+        let _ = writeln!(text, "  {line}");
+    }
     if let Some(path) = &args.output {
         let _ = writeln!(text, "wrote `{}` ({} ticks)", path.display(), run.ticks());
     }

@@ -63,6 +63,14 @@ pub enum PlantError {
         /// The first joint with a non-finite state.
         joint: String,
     },
+    /// The link to a plant in another process failed (it fell silent, or sent what cannot be read).
+    #[error("the link to the plant failed at t = {t:.3} s: {reason}")]
+    Link {
+        /// Plant time of the last state received.
+        t: f64,
+        /// What happened.
+        reason: String,
+    },
     /// A torque vector of the wrong length.
     #[error("expected {expected} joint torques, got {got}")]
     WrongDof {

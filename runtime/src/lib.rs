@@ -16,5 +16,8 @@ pub mod exec {
     pub use skill_exec::exec::*;
 
     mod session;
-    pub use session::{scene_controller, simulate, simulate_task, Mode, SessionError, StepReport, TaskRun, TaskStep};
+    pub use session::{
+        run_on_plant, run_task_on_plant, scene_controller, scene_robot, simulate, simulate_task, Mode, SessionError,
+        StepReport, TaskRun, TaskStep,
+    };
 }

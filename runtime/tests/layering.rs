@@ -7,13 +7,15 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Every workspace crate of the runtime, by folder.
-const CRATES: [(&str, &str); 6] = [
+const CRATES: [(&str, &str); 8] = [
     ("skill-robot", "robot"),
     ("skill-model", "model"),
     ("skill-learn", "learn"),
     ("skill-sim", "sim"),
     ("skill-exec", "exec"),
     ("skill-runtime", "runtime"),
+    ("skill-ros", "ros"),
+    ("skill-transport", "transport"),
 ];
 
 /// Each crate's normal (not dev) dependencies, by name.
@@ -77,6 +79,25 @@ fn the_controller_links_neither_simulator_nor_learner_and_the_plant_no_learner()
     for banned in ["skill-sim", "skill-exec", "rapier3d"] {
         assert!(!learn.contains(banned), "skill-learn links {banned}: {learn:?}");
     }
+    // The transport moves a plant's states and commands: it links the robot model (the Plant
+    // trait) and the wire format, neither the simulator, the learner nor the controller, so a
+    // plant process and a controller process each add only it.
+    let transport = links(&manifests, "skill-transport");
+    for banned in ["skill-sim", "skill-learn", "skill-exec", "skill-model", "rapier3d"] {
+        assert!(
+            !transport.contains(banned),
+            "skill-transport links {banned}: {transport:?}"
+        );
+    }
+    assert!(
+        transport.contains("zenoh") && transport.contains("skill-ros"),
+        "{transport:?}"
+    );
+    let ros = links(&manifests, "skill-ros");
+    assert!(
+        ros.iter().all(|dep| !dep.starts_with("skill-") && dep != "zenoh"),
+        "skill-ros is the wire format alone: {ros:?}"
+    );
     // The one place two rooms meet.
     let runtime = links(&manifests, "skill-runtime");
     for needed in ["skill-sim", "skill-exec", "skill-learn"] {

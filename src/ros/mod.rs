@@ -11,8 +11,7 @@ use std::path::Path;
 
 #[cfg(feature = "mcap")]
 mod bag;
-pub mod cdr;
-pub mod msgs;
+pub use skill_ros::{cdr, msgs};
 #[cfg(feature = "mcap")]
 mod read;
 #[cfg(feature = "mcap")]

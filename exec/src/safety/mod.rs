@@ -27,11 +27,6 @@ use crate::robot::{Robot, RobotData};
 /// How long the damped stop is held after a reflex before the run ends \[s\].
 pub const REFLEX_HOLD_S: f64 = 0.3;
 
-/// Joint damping of the reflex stop \[N m s/rad\], per unit of effort limit: a 176 N m joint gets
-/// 176 × 0.2 = 35 N m s/rad, which stops the LWR-IV's arm from 1 rad/s within a few ticks
-/// without ringing.
-const STOP_DAMPING_PER_EFFORT: f64 = 0.2;
-
 /// The quantity a reflex is about.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -392,25 +387,10 @@ impl Supervisor {
         }
     }
 
-    /// The torques of the reflex stop at `obs`: gravity compensation from the robot model and
-    /// joint damping, within the effort limits. Zero torques when the state itself is not finite.
+    /// The torques of the reflex stop at `obs` ([`Robot::damped_stop_torques`]).
     pub fn stop_torques(&mut self, obs: &Observation, out: &mut [f64]) {
-        let finite = obs.q.iter().chain(obs.qd.iter()).all(|v| v.is_finite());
-        if !finite {
-            out.iter_mut().for_each(|tau| *tau = 0.0);
-            return;
-        }
-        self.robot.forward_kinematics(&mut self.data, obs.q.as_slice());
-        self.robot.gravity_torques(&mut self.data, out);
-        for (idx, tau) in out.iter_mut().enumerate() {
-            let damping = STOP_DAMPING_PER_EFFORT * self.effort[idx];
-            let value = *tau - damping * obs.qd[idx];
-            *tau = if value.is_finite() {
-                value.clamp(-self.effort[idx], self.effort[idx])
-            } else {
-                0.0
-            };
-        }
+        self.robot
+            .damped_stop_torques(&mut self.data, obs.q.as_slice(), obs.qd.as_slice(), out);
     }
 }
 

@@ -6,7 +6,7 @@ use super::{
 };
 use crate::control::{ControllerGains, HybridController};
 use crate::plant::Plant;
-use crate::robot::RobotError;
+use crate::robot::{Robot, RobotError};
 use crate::sim::{RapierPlant, Scene, SimError};
 use crate::skill::Learned;
 
@@ -39,6 +39,18 @@ pub fn simulate(scene: &Scene, mode: Mode<'_, '_>, options: &ExecOptions) -> Res
     with_rig(scene, |rig| simulate_on(rig, mode, options))
 }
 
+/// Runs `mode` on `plant`, an arm the scene's robot models that is not simulated here (a plant in
+/// another process, over `skill-transport`): the controller is the one [`simulate`] builds, from
+/// the scene's robot and wrist sensor and the plant's first state.
+pub fn run_on_plant(
+    scene: &Scene,
+    plant: &mut dyn Plant,
+    mode: Mode<'_, '_>,
+    options: &ExecOptions,
+) -> Result<(RunReport, RunLog), SessionError> {
+    with_plant_rig(scene, plant, |rig| simulate_on(rig, mode, options))
+}
+
 /// Builds the scene's simulation, the controller (null space pulled to the start
 /// configuration) and the rig, and hands the rig to `run`.
 fn with_rig<T>(scene: &Scene, run: impl FnOnce(&mut Rig<'_>) -> Result<T, SessionError>) -> Result<T, SessionError> {
@@ -48,16 +60,31 @@ fn with_rig<T>(scene: &Scene, run: impl FnOnce(&mut Rig<'_>) -> Result<T, Sessio
     run(&mut rig)
 }
 
+/// [`with_rig`] on a plant that is not built here.
+fn with_plant_rig<T>(
+    scene: &Scene,
+    plant: &mut dyn Plant,
+    run: impl FnOnce(&mut Rig<'_>) -> Result<T, SessionError>,
+) -> Result<T, SessionError> {
+    let robot = scene_robot(scene)?;
+    let controller = controller_at(scene, robot, plant.observe().q.as_slice())?;
+    let mut rig = Rig::new(plant, controller, &scene.spec().robot.sensor)?;
+    run(&mut rig)
+}
+
+/// The scene's robot model (its URDF and tool), as [`RapierPlant::from_scene`] loads it.
+pub fn scene_robot(scene: &Scene) -> Result<Robot, RobotError> {
+    Robot::from_urdf_file(&scene.urdf_path(), scene.spec().robot.tool.as_deref())
+}
+
 /// The controller [`simulate`] runs `plant` (built from `scene`) with: default gains, the
 /// scene's wrist sensor, the null space pulled towards the start configuration.
 pub fn scene_controller(scene: &Scene, plant: &RapierPlant) -> Result<HybridController, RobotError> {
-    let q0 = plant.observe().q;
-    HybridController::new(
-        plant.robot().clone(),
-        &scene.spec().robot.sensor,
-        q0.as_slice(),
-        ControllerGains::default(),
-    )
+    controller_at(scene, plant.robot().clone(), plant.observe().q.as_slice())
+}
+
+fn controller_at(scene: &Scene, robot: Robot, q0: &[f64]) -> Result<HybridController, RobotError> {
+    HybridController::new(robot, &scene.spec().robot.sensor, q0, ControllerGains::default())
 }
 
 fn simulate_on(
@@ -134,6 +161,17 @@ pub fn simulate_task(
     options: &ExecOptions,
 ) -> Result<TaskRun, SessionError> {
     with_rig(scene, |rig| task_on(rig, steps, fallbacks, options))
+}
+
+/// [`simulate_task`] on a plant that is not simulated here (see [`run_on_plant`]).
+pub fn run_task_on_plant(
+    scene: &Scene,
+    plant: &mut dyn Plant,
+    steps: &[TaskStep<'_, '_>],
+    fallbacks: &[TaskStep<'_, '_>],
+    options: &ExecOptions,
+) -> Result<TaskRun, SessionError> {
+    with_plant_rig(scene, plant, |rig| task_on(rig, steps, fallbacks, options))
 }
 
 fn task_on(

@@ -3,7 +3,7 @@
 //! of the standard packages, each dependency appended after a line of `=` and `MSG: pkg/Type`,
 //! as rosbag2 writes them).
 
-use super::cdr::{CdrError, CdrReader, CdrWriter};
+use crate::cdr::{CdrError, CdrReader, CdrWriter};
 
 /// `builtin_interfaces/Time`: seconds and nanoseconds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -102,6 +102,8 @@ pub enum MsgType {
     JointState,
     /// `std_msgs/msg/String`.
     String,
+    /// `std_msgs/msg/Float64MultiArray`.
+    Float64MultiArray,
 }
 
 impl MsgType {
@@ -113,6 +115,7 @@ impl MsgType {
             MsgType::TfMessage => "tf2_msgs/msg/TFMessage",
             MsgType::JointState => "sensor_msgs/msg/JointState",
             MsgType::String => "std_msgs/msg/String",
+            MsgType::Float64MultiArray => "std_msgs/msg/Float64MultiArray",
         }
     }
 
@@ -125,6 +128,7 @@ impl MsgType {
             MsgType::TfMessage,
             MsgType::JointState,
             MsgType::String,
+            MsgType::Float64MultiArray,
         ]
         .into_iter()
         .find(|ty| ty.schema_name().replace("/msg/", "/") == short)
@@ -139,48 +143,30 @@ impl MsgType {
             MsgType::TfMessage => &["transforms"],
             MsgType::JointState => &["header", "name", "position", "velocity", "effort"],
             MsgType::String => &["data"],
+            MsgType::Float64MultiArray => &["layout", "data"],
         }
     }
 
-    /// The `ros2msg` definition: the type's fields, then each type it uses after a separator.
+    /// The type's own fields as a `ros2msg` definition writes them (`type name` per line).
+    pub fn own_fields(self) -> &'static str {
+        match self {
+            MsgType::PoseStamped => "std_msgs/Header header\ngeometry_msgs/Pose pose\n",
+            MsgType::WrenchStamped => "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n",
+            MsgType::TfMessage => "geometry_msgs/TransformStamped[] transforms\n",
+            MsgType::JointState => {
+                "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n"
+            }
+            MsgType::String => "string data\n",
+            MsgType::Float64MultiArray => "std_msgs/MultiArrayLayout layout\nfloat64[] data\n",
+        }
+    }
+
+    /// The `ros2msg` definition: the type's fields, then each type it uses after a separator
+    /// (each once, in the order a depth-first walk of the fields meets them, as rosbag2 writes them).
     pub fn definition(self) -> String {
-        let (own, deps): (&str, &[&str]) = match self {
-            MsgType::PoseStamped => (
-                "std_msgs/Header header\ngeometry_msgs/Pose pose\n",
-                &[
-                    "std_msgs/Header",
-                    "builtin_interfaces/Time",
-                    "geometry_msgs/Pose",
-                    "geometry_msgs/Point",
-                    "geometry_msgs/Quaternion",
-                ],
-            ),
-            MsgType::WrenchStamped => (
-                "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n",
-                &[
-                    "std_msgs/Header",
-                    "builtin_interfaces/Time",
-                    "geometry_msgs/Wrench",
-                    "geometry_msgs/Vector3",
-                ],
-            ),
-            MsgType::TfMessage => (
-                "geometry_msgs/TransformStamped[] transforms\n",
-                &[
-                    "geometry_msgs/TransformStamped",
-                    "std_msgs/Header",
-                    "builtin_interfaces/Time",
-                    "geometry_msgs/Transform",
-                    "geometry_msgs/Vector3",
-                    "geometry_msgs/Quaternion",
-                ],
-            ),
-            MsgType::JointState => (
-                "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
-                &["std_msgs/Header", "builtin_interfaces/Time"],
-            ),
-            MsgType::String => ("string data\n", &[]),
-        };
+        let own = self.own_fields();
+        let mut deps: Vec<&str> = Vec::new();
+        nested_types(own, &mut deps);
         let mut text = own.to_owned();
         for dep in deps {
             text.push_str(&"=".repeat(80));
@@ -191,6 +177,33 @@ impl MsgType {
         }
         text
     }
+}
+
+/// The message types `fields` uses, depth first, each once, appended to `into`.
+fn nested_types(fields: &str, into: &mut Vec<&'static str>) {
+    for line in fields.lines() {
+        let Some(ty) = line.split_whitespace().next() else {
+            continue;
+        };
+        let ty = ty.strip_suffix("[]").unwrap_or(ty);
+        if !ty.contains('/') {
+            continue;
+        }
+        let (name, nested) = known_type(ty);
+        if !into.contains(&name) {
+            into.push(name);
+            nested_types(nested, into);
+        }
+    }
+}
+
+/// A type the definitions use, as its `'static` name and fields.
+fn known_type(ty: &str) -> (&'static str, &'static str) {
+    KNOWN_TYPES
+        .iter()
+        .find(|(name, _)| *name == ty)
+        .copied()
+        .unwrap_or_else(|| unreachable!("known_type: every type the definitions use is in KNOWN_TYPES ({ty})"))
 }
 
 /// The names of the top-level fields a `ros2msg` definition declares (the lines before the first
@@ -204,21 +217,45 @@ pub fn definition_fields(text: &str) -> Vec<&str> {
         .collect()
 }
 
-/// The fields of a type that the definitions above depend on.
-fn fields_of(ty: &str) -> &'static str {
-    match ty {
-        "std_msgs/Header" => "builtin_interfaces/Time stamp\nstring frame_id\n",
-        "builtin_interfaces/Time" => "int32 sec\nuint32 nanosec\n",
-        "geometry_msgs/Pose" => "geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n",
-        "geometry_msgs/Point" | "geometry_msgs/Vector3" => "float64 x\nfloat64 y\nfloat64 z\n",
-        "geometry_msgs/Quaternion" => "float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n",
-        "geometry_msgs/Wrench" => "geometry_msgs/Vector3 force\ngeometry_msgs/Vector3 torque\n",
-        "geometry_msgs/Transform" => "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n",
-        "geometry_msgs/TransformStamped" => {
-            "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform\n"
-        }
-        _ => unreachable!("fields_of: every dependency named in MsgType::definition is listed"),
-    }
+/// The types the definitions above use, with their fields (`pkg/Type`, as definitions name them).
+const KNOWN_TYPES: &[(&str, &str)] = &[
+    ("std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n"),
+    ("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"),
+    (
+        "geometry_msgs/Pose",
+        "geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n",
+    ),
+    ("geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n"),
+    ("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"),
+    (
+        "geometry_msgs/Quaternion",
+        "float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n",
+    ),
+    (
+        "geometry_msgs/Wrench",
+        "geometry_msgs/Vector3 force\ngeometry_msgs/Vector3 torque\n",
+    ),
+    (
+        "geometry_msgs/Transform",
+        "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n",
+    ),
+    (
+        "geometry_msgs/TransformStamped",
+        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform\n",
+    ),
+    (
+        "std_msgs/MultiArrayLayout",
+        "std_msgs/MultiArrayDimension[] dim\nuint32 data_offset\n",
+    ),
+    (
+        "std_msgs/MultiArrayDimension",
+        "string label\nuint32 size\nuint32 stride\n",
+    ),
+];
+
+/// The fields of a type the definitions use.
+pub(crate) fn fields_of(ty: &str) -> &'static str {
+    known_type(ty).1
 }
 
 fn write_header(writer: &mut CdrWriter, header: &Header) {
@@ -386,6 +423,66 @@ impl JointState {
     }
 }
 
+/// `std_msgs/MultiArrayDimension`: one dimension of a multi-array's layout.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct MultiArrayDimension {
+    /// Its name.
+    pub label: String,
+    /// Its length.
+    pub size: u32,
+    /// Its stride.
+    pub stride: u32,
+}
+
+/// `std_msgs/Float64MultiArray` (its `layout` flattened: `dim` and `data_offset`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Float64MultiArray {
+    /// `layout.dim`.
+    pub dim: Vec<MultiArrayDimension>,
+    /// `layout.data_offset`: numbers before the array's first element.
+    pub data_offset: u32,
+    /// The numbers.
+    pub data: Vec<f64>,
+}
+
+impl Float64MultiArray {
+    /// The CDR bytes.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut writer = CdrWriter::new();
+        writer.u32(self.dim.len() as u32);
+        for dim in &self.dim {
+            writer.string(&dim.label);
+            writer.u32(dim.size);
+            writer.u32(dim.stride);
+        }
+        writer.u32(self.data_offset);
+        writer.f64_seq(&self.data);
+        writer.finish()
+    }
+
+    /// Reads the CDR bytes.
+    pub fn decode(data: &[u8]) -> Result<Float64MultiArray, CdrError> {
+        let mut reader = CdrReader::new(data)?;
+        // A dimension is at least a string (length and NUL) and two `uint32`s.
+        let count = reader.count("layout.dim", 4 + 1 + 8)?;
+        let mut dim = Vec::with_capacity(count);
+        for _ in 0..count {
+            dim.push(MultiArrayDimension {
+                label: reader.string("layout.dim.label")?,
+                size: reader.u32("layout.dim.size")?,
+                stride: reader.u32("layout.dim.stride")?,
+            });
+        }
+        let array = Float64MultiArray {
+            dim,
+            data_offset: reader.u32("layout.data_offset")?,
+            data: reader.f64_seq("data")?,
+        };
+        reader.finish("data")?;
+        Ok(array)
+    }
+}
+
 /// `std_msgs/String`'s CDR bytes.
 pub fn encode_string(text: &str) -> Vec<u8> {
     let mut writer = CdrWriter::new();
@@ -404,6 +501,71 @@ pub fn decode_string(data: &[u8]) -> Result<String, CdrError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn hex(bytes: &[u8]) -> String {
+        bytes.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    /// Bytes that `rosbags` (an independent CDR implementation, in Python) writes for the same
+    /// messages, pasted from its output: our encoder must produce them byte for byte.
+    #[test]
+    fn encodings_match_an_independent_implementation() {
+        let joints = JointState {
+            header: Header {
+                stamp: Time {
+                    sec: 1_700_000_000,
+                    nanosec: 123_456_789,
+                },
+                frame_id: "base_link".into(),
+            },
+            name: vec!["joint1".into(), "joint_2".into(), "j3".into()],
+            position: vec![0.1, -1.5, std::f64::consts::PI],
+            velocity: vec![],
+            effort: vec![1.0, 2.0, 3.0],
+        };
+        assert_eq!(
+            hex(&joints.encode()),
+            "0001000000f1536515cd5b070a000000626173655f6c696e6b00000003000000070000006a6f696e7431000008000000\
+             6a6f696e745f3200030000006a330000030000009a9999999999b93f000000000000f8bf182d4454fb21094000000000\
+             03000000000000000000f03f00000000000000400000000000000840"
+        );
+        assert_eq!(JointState::decode(&joints.encode()).expect("decodes"), joints);
+        let wrench = WrenchStamped {
+            header: Header {
+                stamp: Time { sec: 5, nanosec: 6 },
+                frame_id: "tool0".into(),
+            },
+            force: [1.0, 2.0, 3.0],
+            torque: [-0.1, -0.2, -0.3],
+        };
+        assert_eq!(
+            hex(&wrench.encode()),
+            "00010000050000000600000006000000746f6f6c3000000000000000000000000000f03f000000000000004000000000\
+             000008409a9999999999b9bf9a9999999999c9bf333333333333d3bf"
+        );
+    }
+
+    #[test]
+    fn multi_arrays_round_trip_and_refuse_truncation() {
+        let array = Float64MultiArray {
+            dim: vec![MultiArrayDimension {
+                label: "effort".into(),
+                size: 3,
+                stride: 3,
+            }],
+            data_offset: 0,
+            data: vec![1.5, -2.0, f64::MAX],
+        };
+        let bytes = array.encode();
+        // header, dim count, "effort\0" with its length, size, stride, offset, data count, then
+        // the doubles from an 8-byte boundary.
+        assert_eq!(&bytes[..8], &[0, 1, 0, 0, 1, 0, 0, 0]);
+        assert_eq!(Float64MultiArray::decode(&bytes).expect("decodes"), array);
+        for cut in 0..bytes.len() {
+            assert!(Float64MultiArray::decode(&bytes[..cut]).is_err(), "cut at {cut}");
+        }
+        assert_eq!(MsgType::Float64MultiArray.definition().matches("MSG: ").count(), 2);
+    }
 
     #[test]
     fn messages_round_trip() {

@@ -1,0 +1,189 @@
+//! `skillc plant` and `skillc run --plant`: the simulated arm served in one process and the skill
+//! engine with its controller in another, over Zenoh ([`skill_transport`]). Without the `zenoh`
+//! feature both say how to get it.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use crate::load::{error_chain, load_scene, Failure};
+use crate::out::Verbosity;
+use skill_runtime::sim::Scene;
+
+/// Arguments of `skillc plant`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PlantArgs {
+    /// The scene to simulate.
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Change a scene value, as `skillc run --set` does (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Serve this shipped robot (`lwr4`, `iiwa14`) instead of the scene's, its tool starting where
+    /// the scene's robot starts its tool; give the run the same `--robot`.
+    #[arg(long, value_name = "NAME")]
+    pub robot: Option<String>,
+    /// Where to accept runs and ROS 2 peers: `tcp/HOST:PORT` (`tcp/0.0.0.0:7447` for every interface).
+    #[arg(long, value_name = "tcp/HOST:PORT")]
+    pub listen: String,
+    /// The ROS domain (0-232), as `ROS_DOMAIN_ID` sets it for ROS 2 tools.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232))]
+    pub domain: u32,
+}
+
+/// How `skillc run` reaches a plant in another process.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct LinkArgs {
+    /// Run against the plant `skillc plant` serves at `tcp/HOST:PORT` instead of simulating
+    /// here; the scene still gives the robot model and the wrist sensor's mount.
+    #[arg(long, value_name = "tcp/HOST:PORT")]
+    pub plant: Option<String>,
+    /// The ROS domain of --plant (0-232).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232), requires = "plant")]
+    pub domain: u32,
+    /// With --plant: the plant steps once per command, so the run computes exactly what it
+    /// computes in one process (the default).
+    #[arg(long, requires = "plant", conflicts_with = "realtime")]
+    pub lockstep: bool,
+    /// With --plant: the plant ticks on its own 1 ms clock and holds the last command when one is
+    /// late; the run prints the loop's timing.
+    #[arg(long, requires = "plant")]
+    pub realtime: bool,
+}
+
+/// The scene at `path` with `sets`, and the shipped `robot` swapped in when one is named.
+pub fn scene_with_robot(path: &std::path::Path, sets: &[String], robot: Option<&str>) -> Result<Scene, Failure> {
+    let Some(name) = robot else {
+        return load_scene(path, sets);
+    };
+    let swap = crate::eval::robot::Swap::new(name, &crate::defaults::root().map_err(Failure::Usage)?)?;
+    let mut all = sets.to_vec();
+    all.extend(swap.sets(path, sets).map_err(Failure::Input)?);
+    load_scene(path, &all)
+}
+
+#[cfg(feature = "zenoh")]
+mod enabled {
+    use std::time::Duration;
+
+    use skill_runtime::exec::SessionError;
+    use skill_runtime::plant::Plant;
+    use skill_runtime::sim::RapierPlant;
+    use skill_transport::node::{self, Role};
+    use skill_transport::{LinkMode, RemoteOptions, RemotePlant, ServeOptions};
+
+    use super::*;
+
+    /// How long a run looks for its plant.
+    const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
+    /// In lockstep, how long a step waits for the plant (a slow machine's debug build included).
+    const LOCKSTEP_SILENCE: Duration = Duration::from_secs(5);
+    /// In realtime, how long without a state before the run fails (50 control periods).
+    const REALTIME_SILENCE: Duration = Duration::from_millis(50);
+    /// In realtime, how long the plant waits for a command before its damped stop.
+    const PLANT_SILENCE: Duration = Duration::from_millis(20);
+
+    pub(super) fn serve(args: &PlantArgs, verbosity: Verbosity) -> Result<String, Failure> {
+        node::check_endpoint(&args.listen).map_err(|err| Failure::Usage(err.to_string()))?;
+        let scene = scene_with_robot(&args.scene, &args.sets, args.robot.as_deref())?;
+        let mut plant = RapierPlant::from_scene(&scene).map_err(|err| Failure::Input(error_chain(&err)))?;
+        let robot = plant.robot().clone();
+        let stop = crate::atomic::stop_on_signal();
+        let session = node::open(&args.listen, Role::Listen).map_err(|err| Failure::Usage(err.to_string()))?;
+        let options = ServeOptions {
+            domain: args.domain,
+            period_s: 1e-3,
+            silence: PLANT_SILENCE,
+            node_name: "skillc_plant".into(),
+            sensor_frame: scene.spec().robot.sensor.clone(),
+        };
+        if !verbosity.quiet() {
+            println!(
+                "plant: serving `{}` ({}, {} joints) at {} on ROS domain {}: /joint_states, /wrench and \
+                 /skillc/state out, /joint_effort_commands in; Ctrl-C stops",
+                scene.file(),
+                robot.name(),
+                robot.dof(),
+                args.listen,
+                args.domain
+            );
+        }
+        let summary = skill_transport::serve(&session, &mut plant, &robot, &options, stop)
+            .map_err(|err| Failure::Input(error_chain(&err)))?;
+        node::close(&session);
+        let mut text = String::new();
+        let _ = writeln!(
+            text,
+            "plant: stopped after {} ticks ({:.3} s simulated): {} session(s), {} command(s) applied, {} late, {} \
+             dropped, {} unreadable, {} damped stop(s)",
+            summary.ticks,
+            plant.time(),
+            summary.sessions,
+            summary.commands,
+            summary.late,
+            summary.dropped,
+            summary.malformed,
+            summary.damped_stops
+        );
+        if let Some(audit) = plant.take_contact_audit() {
+            let _ = writeln!(text, "  {}", audit.summary());
+        }
+        Ok(text)
+    }
+
+    /// Connects to the plant `link` names and runs `run` on it; the loop's line in realtime.
+    pub fn run_remote<T>(
+        scene: &Scene,
+        link: &LinkArgs,
+        endpoint: &str,
+        run: impl FnOnce(&mut dyn Plant) -> Result<T, SessionError>,
+    ) -> Result<(T, Option<String>), Failure> {
+        node::check_endpoint(endpoint).map_err(|err| Failure::Usage(err.to_string()))?;
+        let robot = skill_runtime::exec::scene_robot(scene).map_err(|err| Failure::Input(error_chain(&err)))?;
+        let mode = if link.realtime {
+            LinkMode::Realtime
+        } else {
+            LinkMode::Lockstep
+        };
+        let options = RemoteOptions {
+            endpoint: endpoint.to_owned(),
+            domain: link.domain,
+            mode,
+            connect_timeout: CONNECT_TIMEOUT,
+            silence: match mode {
+                LinkMode::Lockstep => LOCKSTEP_SILENCE,
+                LinkMode::Realtime => REALTIME_SILENCE,
+            },
+        };
+        let mut plant = RemotePlant::connect(options, robot.dof()).map_err(|err| Failure::Input(error_chain(&err)))?;
+        let result = run(&mut plant).map_err(|err| Failure::Input(error_chain(&err)))?;
+        let line = (mode == LinkMode::Realtime).then(|| plant.stats().line());
+        Ok((result, line))
+    }
+}
+
+#[cfg(feature = "zenoh")]
+pub use enabled::run_remote;
+
+/// Runs `skillc plant`.
+pub fn plant(args: &PlantArgs, verbosity: Verbosity) -> u8 {
+    #[cfg(feature = "zenoh")]
+    let result = enabled::serve(args, verbosity);
+    #[cfg(not(feature = "zenoh"))]
+    let result: Result<String, Failure> = {
+        let _ = (args, verbosity);
+        Err(without_zenoh())
+    };
+    match result {
+        Ok(text) => match crate::out::print_or_code(&text) {
+            Ok(()) => 0,
+            Err(code) => code,
+        },
+        Err(failure) => failure.report(),
+    }
+}
+
+/// The error of `plant` and `--plant` in a build without the `zenoh` feature.
+#[cfg(not(feature = "zenoh"))]
+pub fn without_zenoh() -> Failure {
+    Failure::Usage("this skillc was built without the `zenoh` feature: build it with `cargo build --release` (the feature is on by default)".into())
+}

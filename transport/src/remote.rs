@@ -1,0 +1,336 @@
+//! A [`Plant`] whose arm is served by another process ([`crate::serve`]): each step publishes the
+//! torques, numbered with the tick of the state they answer, and waits for the plant's next state.
+//! In lockstep that state is the plant's next tick, exactly as in one process; in realtime it is
+//! whatever the plant's own clock reached (the newest state, later ones skipped), and the loop's
+//! timing as the plant measured it is gathered in [`LoopStats`].
+
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use skill_robot::plant::{Observation, Plant, PlantError};
+use skill_ros::msgs::{self, Float64MultiArray, MsgType};
+use zenoh::pubsub::Subscriber;
+use zenoh::{Session, Wait};
+
+use crate::node::{self, Node, Role, RosPublisher};
+use crate::wire::{self, State};
+use crate::{start_key, TransportError, COMMANDS, STATE};
+
+/// In realtime, how long before the plant's next state is due the run polls for it.
+const SPIN: Duration = Duration::from_micros(300);
+
+/// How the run and the plant keep time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkMode {
+    /// The plant steps once per command.
+    Lockstep,
+    /// The plant steps on its own clock and holds the last torques when a command is late.
+    Realtime,
+}
+
+impl LinkMode {
+    /// The word the start query carries.
+    pub fn word(self) -> &'static str {
+        match self {
+            LinkMode::Lockstep => "lockstep",
+            LinkMode::Realtime => "realtime",
+        }
+    }
+}
+
+/// Where the plant is and how to talk to it.
+#[derive(Debug, Clone)]
+pub struct RemoteOptions {
+    /// `tcp/HOST:PORT`.
+    pub endpoint: String,
+    /// The ROS domain.
+    pub domain: u32,
+    /// Lockstep or realtime.
+    pub mode: LinkMode,
+    /// How long to look for the plant before giving up.
+    pub connect_timeout: Duration,
+    /// How long a step waits for the plant's next state before the plant counts as silent.
+    pub silence: Duration,
+}
+
+/// The loop's figures over a run, as the plant measured them.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoopStats {
+    /// Steps taken.
+    pub ticks: u64,
+    /// Ticks for which the plant held the last torques.
+    pub late: u64,
+    /// States the run skipped because a newer one had come (realtime).
+    pub skipped: u64,
+    /// Publish of a state to the arrival of its command, µs, per tick that had one.
+    pub round_trips_us: Vec<f64>,
+    /// The plant's real time between ticks, µs (realtime).
+    pub periods_us: Vec<f64>,
+    /// The plant's control period, µs.
+    pub nominal_period_us: f64,
+}
+
+/// The `p`-quantile (0..=1) of `values`, by the nearest rank; NaN when empty.
+fn quantile(values: &[f64], p: f64) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let rank = ((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
+
+impl LoopStats {
+    /// One line: `loop: N ticks, L late commands (P %), round trip µs: median A, p99 B, max C,
+    /// jitter µs: p99 D` (jitter: how far the plant's period strayed from its nominal one).
+    pub fn line(&self) -> String {
+        let share = if self.ticks == 0 {
+            0.0
+        } else {
+            100.0 * self.late as f64 / self.ticks as f64
+        };
+        let jitter: Vec<f64> = self
+            .periods_us
+            .iter()
+            .map(|period| (period - self.nominal_period_us).abs())
+            .collect();
+        format!(
+            "loop: {} ticks, {} late commands ({share:.2} %), round trip µs: median {:.0}, p99 {:.0}, max {:.0}, \
+             jitter µs: p99 {:.0}",
+            self.ticks,
+            self.late,
+            quantile(&self.round_trips_us, 0.5),
+            quantile(&self.round_trips_us, 0.99),
+            quantile(&self.round_trips_us, 1.0),
+            quantile(&jitter, 0.99),
+        )
+    }
+}
+
+/// The arm on the other side of the link.
+pub struct RemotePlant {
+    // Declared before the session so they are undeclared before it closes.
+    _subscription: Subscriber<()>,
+    commands: RosPublisher,
+    _node: Node,
+    session: Session,
+    states: mpsc::Receiver<Vec<u8>>,
+    options: RemoteOptions,
+    dof: usize,
+    current: State,
+    torques: Vec<f64>,
+    stats: LoopStats,
+    /// When the last state came, and the period the run steps by.
+    last_arrival: Option<Instant>,
+    period_s: f64,
+}
+
+impl std::fmt::Debug for RemotePlant {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RemotePlant")
+            .field("endpoint", &self.options.endpoint)
+            .field("tick", &self.current.tick)
+            .finish()
+    }
+}
+
+impl RemotePlant {
+    /// Connects to the plant at `options.endpoint`, starts a session in `options.mode` and takes
+    /// its state; `dof` is the run's robot's, which the plant's must match.
+    pub fn connect(options: RemoteOptions, dof: usize) -> Result<RemotePlant, TransportError> {
+        let session = node::open(&options.endpoint, Role::Connect)?;
+        let mut ros = Node::new(&session, options.domain, "skillc_run")?;
+        let (tx, states) = mpsc::channel();
+        let subscription = ros.subscription(&session, STATE, MsgType::Float64MultiArray, move |sample| {
+            let _ = tx.send(sample.payload().to_bytes().into_owned());
+        })?;
+        let commands = ros.publisher(&session, COMMANDS, MsgType::Float64MultiArray)?;
+        let current = start(&session, &options, dof)?;
+        let nominal_period_us = f64::NAN;
+        Ok(RemotePlant {
+            _subscription: subscription,
+            commands,
+            _node: ros,
+            session,
+            states,
+            dof,
+            torques: vec![0.0; dof],
+            stats: LoopStats {
+                nominal_period_us,
+                ..LoopStats::default()
+            },
+            current,
+            options,
+            last_arrival: None,
+            period_s: 1e-3,
+        })
+    }
+
+    /// The loop's figures so far.
+    pub fn stats(&self) -> &LoopStats {
+        &self.stats
+    }
+
+    /// The Zenoh session (for tests that listen in).
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    fn link_error(&self, reason: String) -> PlantError {
+        PlantError::Link {
+            t: self.current.obs.t,
+            reason,
+        }
+    }
+
+    /// Waits for a state newer than the current one.
+    fn next_state(&mut self) -> Result<State, PlantError> {
+        let now = Instant::now();
+        let deadline = now + self.options.silence;
+        // Realtime: sleep until shortly before the plant's next tick is due, then poll. Lockstep
+        // polls from the start: the plant answers within a step's computation.
+        let spin_from = match self.options.mode {
+            LinkMode::Realtime => self
+                .last_arrival
+                .map_or(now, |at| at + Duration::from_secs_f64(self.period_s) - SPIN),
+            LinkMode::Lockstep => now,
+        };
+        loop {
+            let payload = match node::recv_until(&self.states, spin_from, deadline) {
+                Ok(payload) => payload,
+                Err(_) => {
+                    return Err(self.link_error(format!(
+                        "no state from the plant at `{}` for {} ms (is it still running?)",
+                        self.options.endpoint,
+                        self.options.silence.as_millis()
+                    )))
+                }
+            };
+            let state = Float64MultiArray::decode(&payload)
+                .map_err(|err| err.to_string())
+                .and_then(|array| State::decode(&array, self.dof).map_err(|err| err.0))
+                .map_err(|reason| self.link_error(format!("a state from the plant is unreadable: {reason}")))?;
+            if state.tick > self.current.tick {
+                self.last_arrival = Some(Instant::now());
+                return Ok(state);
+            }
+            // The plant repeating a state it already sent (its heartbeat) or one from before the session.
+        }
+    }
+}
+
+/// Asks the plant to start a session until it answers or `options.connect_timeout` passes.
+fn start(session: &Session, options: &RemoteOptions, dof: usize) -> Result<State, TransportError> {
+    let began = Instant::now();
+    let key = start_key(options.domain);
+    loop {
+        let replies = session
+            .get(key.clone())
+            .payload(msgs::encode_string(options.mode.word()))
+            .timeout(Duration::from_millis(500))
+            .wait()
+            .map_err(|err| TransportError::Zenoh {
+                what: format!("asking `{key}`"),
+                reason: err.to_string(),
+            })?;
+        while let Ok(reply) = replies.recv() {
+            let mismatch = |reason: String| TransportError::Mismatch {
+                endpoint: options.endpoint.clone(),
+                reason,
+            };
+            match reply.result() {
+                Ok(sample) => {
+                    let array = Float64MultiArray::decode(&sample.payload().to_bytes())
+                        .map_err(|err| mismatch(format!("answered with bytes that are no state: {err}")))?;
+                    return State::decode(&array, dof).map_err(|err| mismatch(err.0));
+                }
+                Err(err) => {
+                    let words = msgs::decode_string(&err.payload().to_bytes()).unwrap_or_default();
+                    return Err(mismatch(format!("refused the session: {words}")));
+                }
+            }
+        }
+        if began.elapsed() >= options.connect_timeout {
+            return Err(TransportError::NoPlant {
+                endpoint: options.endpoint.clone(),
+                domain: options.domain,
+                waited_s: options.connect_timeout.as_secs_f64(),
+            });
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+impl Plant for RemotePlant {
+    fn dof(&self) -> usize {
+        self.dof
+    }
+
+    fn time(&self) -> f64 {
+        self.current.obs.t
+    }
+
+    fn observe_into(&self, out: &mut Observation) {
+        out.clone_from(&self.current.obs);
+    }
+
+    fn apply(&mut self, torques: &[f64]) -> Result<(), PlantError> {
+        if torques.len() != self.dof {
+            return Err(PlantError::WrongDof {
+                expected: self.dof,
+                got: torques.len(),
+            });
+        }
+        self.torques.copy_from_slice(torques);
+        Ok(())
+    }
+
+    fn step(&mut self, dt: f64) -> Result<(), PlantError> {
+        self.period_s = dt;
+        let payload = wire::encode_command(&self.torques).encode();
+        self.commands
+            .put_numbered(payload, self.current.tick as i64 + 1)
+            .map_err(|err| self.link_error(err.to_string()))?;
+        let mut state = self.next_state()?;
+        match self.options.mode {
+            LinkMode::Lockstep => {
+                if state.tick != self.current.tick + 1 {
+                    return Err(self.link_error(format!(
+                        "the plant went from tick {} to {}: another controller is commanding it",
+                        self.current.tick, state.tick
+                    )));
+                }
+                let stepped = state.obs.t - self.current.obs.t;
+                if (stepped - dt).abs() > 1e-9 {
+                    return Err(self.link_error(format!(
+                        "the plant stepped {stepped} s, the run {dt} s: give `skillc plant` the run's period"
+                    )));
+                }
+            }
+            LinkMode::Realtime => {
+                self.stats.nominal_period_us = dt * 1e6;
+                while let Ok(payload) = self.states.try_recv() {
+                    if let Some(newer) = Float64MultiArray::decode(&payload)
+                        .ok()
+                        .and_then(|array| State::decode(&array, self.dof).ok())
+                        .filter(|newer| newer.tick > state.tick)
+                    {
+                        self.stats.skipped += newer.tick - state.tick;
+                        state = newer;
+                    }
+                }
+            }
+        }
+        self.stats.ticks += 1;
+        self.stats.late += u64::from(state.late);
+        if state.round_trip_us.is_finite() {
+            self.stats.round_trips_us.push(state.round_trip_us);
+        }
+        if state.period_us.is_finite() {
+            self.stats.periods_us.push(state.period_us);
+        }
+        self.current = state;
+        Ok(())
+    }
+}

@@ -1,0 +1,383 @@
+//! Serving a plant: each control period the state goes out on `/skillc/state`, `/joint_states` and
+//! `/wrench`, and torques come in on `/joint_effort_commands`. A run opens a session with the
+//! start query, in one of two modes:
+//!
+//! - **lockstep**: the plant steps once per command, so a run over the link computes exactly what
+//!   it computes in one process. Without commands it stands still and repeats its state every
+//!   [`HEARTBEAT`] (so a run or a ROS 2 tool that joins late sees it).
+//! - **realtime**: the plant steps on its own clock, one period at a time. A command counts for a
+//!   tick only if it answers the state published just before (its sequence number is that state's
+//!   tick + 1); when none has come by the tick, the plant holds the last torques and counts the
+//!   tick late, and a command that comes after its tick is dropped, never applied to another. A
+//!   controller silent for longer than [`ServeOptions::silence`] gets the damped stop: gravity
+//!   compensation with joint damping, until commands come again.
+//!
+//! Foreign ROS 2 controllers drive the plant in lockstep (its default before any session): every
+//! command they publish steps it once.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use skill_robot::plant::{Observation, Plant};
+use skill_robot::robot::Robot;
+use skill_ros::msgs::{self, Float64MultiArray, Header, JointState, MsgType, Time, WrenchStamped};
+use zenoh::query::Query;
+use zenoh::{Session, Wait};
+
+use crate::node::{self, Node, RosPublisher};
+use crate::wire::{self, State};
+use crate::{start_key, TransportError, COMMANDS, JOINT_STATES, STATE, WRENCH};
+
+/// How often a plant that is not stepping repeats its state.
+pub const HEARTBEAT: Duration = Duration::from_millis(100);
+/// In realtime, how long before each tick the plant polls for its command instead of sleeping.
+const SPIN: Duration = Duration::from_micros(400);
+
+/// How a plant is served.
+#[derive(Debug, Clone)]
+pub struct ServeOptions {
+    /// The ROS domain.
+    pub domain: u32,
+    /// The control period, s.
+    pub period_s: f64,
+    /// In realtime, how long without a command before the damped stop.
+    pub silence: Duration,
+    /// The node's name.
+    pub node_name: String,
+    /// The frame the wrench is written in (the sensor's link).
+    pub sensor_frame: String,
+}
+
+/// What a plant did while it was served.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ServeSummary {
+    /// Steps taken.
+    pub ticks: u64,
+    /// Sessions runs opened.
+    pub sessions: u64,
+    /// Commands applied.
+    pub commands: u64,
+    /// Realtime ticks without their command (the last torques held).
+    pub late: u64,
+    /// Commands dropped because their tick had passed.
+    pub dropped: u64,
+    /// Commands that could not be read (wrong length or bytes), dropped.
+    pub malformed: u64,
+    /// Times the damped stop took over from a silent controller.
+    pub damped_stops: u64,
+}
+
+/// How a session runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pace {
+    Lockstep,
+    Realtime,
+}
+
+enum Event {
+    Command { torques: Vec<f64>, sequence: Option<i64> },
+    Malformed,
+    Start(Query),
+}
+
+struct Outlets {
+    state: RosPublisher,
+    joints: RosPublisher,
+    wrench: RosPublisher,
+    names: Vec<String>,
+    sensor_frame: String,
+}
+
+impl Outlets {
+    fn publish(&self, state: &State, effort: &[f64]) -> Result<(), TransportError> {
+        self.state.put(state.encode().encode())?;
+        let header = Header {
+            stamp: Time::from_seconds(state.obs.t),
+            frame_id: String::new(),
+        };
+        let joints = JointState {
+            header: header.clone(),
+            name: self.names.clone(),
+            position: state.obs.q.as_slice().to_vec(),
+            velocity: state.obs.qd.as_slice().to_vec(),
+            effort: effort.to_vec(),
+        };
+        self.joints.put(joints.encode())?;
+        let w = &state.obs.wrench_sensor;
+        let wrench = WrenchStamped {
+            header: Header {
+                frame_id: self.sensor_frame.clone(),
+                ..header
+            },
+            force: [w[0], w[1], w[2]],
+            torque: [w[3], w[4], w[5]],
+        };
+        self.wrench.put(wrench.encode())
+    }
+}
+
+/// Serves `plant` (whose arm `robot` models) on `session` until `stop` is set (by a signal).
+pub fn serve(
+    session: &Session,
+    plant: &mut dyn Plant,
+    robot: &Robot,
+    options: &ServeOptions,
+    stop: &AtomicBool,
+) -> Result<ServeSummary, TransportError> {
+    let dof = plant.dof();
+    let (tx, rx) = mpsc::channel::<Event>();
+    let mut ros = Node::new(session, options.domain, &options.node_name)?;
+    let outlets = Outlets {
+        state: ros.publisher(session, STATE, MsgType::Float64MultiArray)?,
+        joints: ros.publisher(session, JOINT_STATES, MsgType::JointState)?,
+        wrench: ros.publisher(session, WRENCH, MsgType::WrenchStamped)?,
+        names: robot.joints().iter().map(|joint| joint.name.clone()).collect(),
+        sensor_frame: options.sensor_frame.clone(),
+    };
+    let commands_tx = tx.clone();
+    let _commands = ros.subscription(session, COMMANDS, MsgType::Float64MultiArray, move |sample| {
+        let (payload, attachment) = node::sample_parts(&sample);
+        let event = match Float64MultiArray::decode(&payload)
+            .ok()
+            .and_then(|array| wire::decode_command(&array, dof).ok().map(<[f64]>::to_vec))
+        {
+            Some(torques) => Event::Command {
+                torques,
+                sequence: attachment.map(|a| a.sequence),
+            },
+            None => Event::Malformed,
+        };
+        let _ = commands_tx.send(event);
+    })?;
+    let start = start_key(options.domain);
+    let _queryable = session
+        .declare_queryable(start.clone())
+        .callback(move |query| {
+            let _ = tx.send(Event::Start(query));
+        })
+        .wait()
+        .map_err(|err| TransportError::Zenoh {
+            what: format!("declaring the queryable `{start}`"),
+            reason: err.to_string(),
+        })?;
+
+    let mut server = Server {
+        plant,
+        robot,
+        data: robot.data(),
+        obs: Observation::zeros(dof),
+        torques: vec![0.0; dof],
+        hold: vec![0.0; dof],
+        tick: 0,
+        published_at: Instant::now(),
+        round_trip_us: f64::NAN,
+        summary: ServeSummary::default(),
+        period_s: options.period_s,
+    };
+    server.publish(&outlets, false, f64::NAN)?;
+    let mut pace = Pace::Lockstep;
+    while !stop.load(Ordering::Relaxed) {
+        pace = match pace {
+            Pace::Lockstep => server.lockstep(&rx, &outlets, stop)?,
+            Pace::Realtime => server.realtime(&rx, &outlets, options, stop)?,
+        };
+    }
+    Ok(server.summary)
+}
+
+struct Server<'a> {
+    plant: &'a mut dyn Plant,
+    robot: &'a Robot,
+    data: skill_robot::robot::RobotData,
+    obs: Observation,
+    /// The torques applied last.
+    torques: Vec<f64>,
+    hold: Vec<f64>,
+    tick: u64,
+    published_at: Instant,
+    round_trip_us: f64,
+    summary: ServeSummary,
+    period_s: f64,
+}
+
+impl Server<'_> {
+    fn publish(&mut self, outlets: &Outlets, late: bool, period_us: f64) -> Result<(), TransportError> {
+        self.plant.observe_into(&mut self.obs);
+        let state = State {
+            tick: self.tick,
+            obs: self.obs.clone(),
+            round_trip_us: self.round_trip_us,
+            late,
+            period_us,
+        };
+        outlets.publish(&state, &self.torques)?;
+        self.published_at = Instant::now();
+        self.round_trip_us = f64::NAN;
+        Ok(())
+    }
+
+    fn step(&mut self, torques: Option<&[f64]>) -> Result<(), TransportError> {
+        if let Some(torques) = torques {
+            self.plant.apply(torques)?;
+            self.torques.copy_from_slice(torques);
+        }
+        self.plant.step(self.period_s)?;
+        self.tick += 1;
+        Ok(())
+    }
+
+    /// Answers a start query with the current state; the mode it asks for.
+    fn start(&mut self, query: &Query) -> Option<Pace> {
+        let asked = query
+            .payload()
+            .and_then(|bytes| msgs::decode_string(&bytes.to_bytes()).ok())
+            .unwrap_or_default();
+        let pace = match asked.as_str() {
+            "lockstep" => Pace::Lockstep,
+            "realtime" => Pace::Realtime,
+            _ => {
+                let _ = query
+                    .reply_err(msgs::encode_string(&format!(
+                        "unknown mode `{asked}`: ask for `lockstep` or `realtime`"
+                    )))
+                    .wait();
+                return None;
+            }
+        };
+        self.plant.observe_into(&mut self.obs);
+        let state = State {
+            tick: self.tick,
+            obs: self.obs.clone(),
+            round_trip_us: f64::NAN,
+            late: false,
+            period_us: f64::NAN,
+        };
+        let _ = query.reply(query.key_expr().clone(), state.encode().encode()).wait();
+        self.published_at = Instant::now();
+        self.summary.sessions += 1;
+        Some(pace)
+    }
+
+    fn lockstep(
+        &mut self,
+        rx: &mpsc::Receiver<Event>,
+        outlets: &Outlets,
+        stop: &AtomicBool,
+    ) -> Result<Pace, TransportError> {
+        while !stop.load(Ordering::Relaxed) {
+            match rx.recv_timeout(HEARTBEAT) {
+                Ok(Event::Command { torques, .. }) => {
+                    self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
+                    self.step(Some(&torques))?;
+                    self.summary.commands += 1;
+                    self.summary.ticks += 1;
+                    self.publish(outlets, false, f64::NAN)?;
+                }
+                Ok(Event::Malformed) => self.summary.malformed += 1,
+                Ok(Event::Start(query)) => {
+                    if let Some(Pace::Realtime) = self.start(&query) {
+                        return Ok(Pace::Realtime);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => self.publish(outlets, false, f64::NAN)?,
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            }
+        }
+        Ok(Pace::Lockstep)
+    }
+
+    /// The damped stop's torques at the current state, into `hold`.
+    fn damped_stop(&mut self) {
+        self.plant.observe_into(&mut self.obs);
+        self.robot.damped_stop_torques(
+            &mut self.data,
+            self.obs.q.as_slice(),
+            self.obs.qd.as_slice(),
+            &mut self.hold,
+        );
+    }
+
+    fn realtime(
+        &mut self,
+        rx: &mpsc::Receiver<Event>,
+        outlets: &Outlets,
+        options: &ServeOptions,
+        stop: &AtomicBool,
+    ) -> Result<Pace, TransportError> {
+        let period = Duration::from_secs_f64(self.period_s);
+        // Until the run's first command, hold the arm where it is.
+        self.damped_stop();
+        let hold = self.hold.clone();
+        self.plant.apply(&hold)?;
+        self.torques.copy_from_slice(&hold);
+        let mut last_tick = Instant::now();
+        let mut next = last_tick + period;
+        let mut last_command = last_tick;
+        let mut stopped = false;
+        while !stop.load(Ordering::Relaxed) {
+            let mut fresh: Option<Vec<f64>> = None;
+            loop {
+                let now = Instant::now();
+                if now >= next {
+                    break;
+                }
+                match node::recv_until(rx, next - SPIN, next) {
+                    Ok(Event::Command { torques, sequence }) => {
+                        if sequence == Some(self.tick as i64 + 1) {
+                            self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
+                            fresh = Some(torques);
+                        } else {
+                            self.summary.dropped += 1;
+                        }
+                    }
+                    Ok(Event::Malformed) => self.summary.malformed += 1,
+                    Ok(Event::Start(query)) => match self.start(&query) {
+                        Some(Pace::Lockstep) => return Ok(Pace::Lockstep),
+                        // A new realtime session: its clock starts now.
+                        Some(Pace::Realtime) => {
+                            next = Instant::now() + period;
+                            last_command = Instant::now();
+                        }
+                        None => {}
+                    },
+                    Err(mpsc::RecvTimeoutError::Timeout) => break,
+                    Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Pace::Realtime),
+                }
+            }
+            let now = Instant::now();
+            let period_us = now.duration_since(last_tick).as_secs_f64() * 1e6;
+            last_tick = now;
+            let late = fresh.is_none();
+            match fresh {
+                Some(torques) => {
+                    last_command = now;
+                    stopped = false;
+                    self.step(Some(&torques))?;
+                    self.summary.commands += 1;
+                }
+                None if now.duration_since(last_command) > options.silence => {
+                    if !stopped {
+                        self.summary.damped_stops += 1;
+                        stopped = true;
+                    }
+                    self.damped_stop();
+                    let hold = self.hold.clone();
+                    self.step(Some(&hold))?;
+                }
+                None => {
+                    self.summary.late += 1;
+                    self.step(None)?;
+                }
+            }
+            self.summary.ticks += 1;
+            self.publish(outlets, late, period_us)?;
+            next += period;
+            if next + period < Instant::now() {
+                // Far behind (the machine stalled): start the clock afresh rather than rush.
+                next = Instant::now() + period;
+            }
+        }
+        Ok(Pace::Realtime)
+    }
+}

@@ -1,0 +1,229 @@
+//! What the plant and the run say to each other on skillc's own topics, as
+//! `std_msgs/msg/Float64MultiArray` so ROS 2 tools can show them: the plant's state each tick
+//! (its whole [`Observation`], the tick it belongs to and the loop's timing as the plant measured
+//! it) and the run's joint torques.
+//!
+//! A state is one array whose layout names its blocks in order, each dimension's `size` the block's
+//! length: `tick`, `t`, `q`, `qd`, `wrench_sensor`, `wrench_base`, `arm_contact_n`,
+//! `arm_contact_link` (−1 for none), `round_trip_us` (publish of the previous state to the arrival
+//! of the command that answered it, NaN when none did), `late` (1 when the plant held the last
+//! command because the one for this tick had not come) and `period_us` (the plant's real time since
+//! its previous tick, NaN in lockstep). A command is one block `effort` of the joint torques; which
+//! state it answers is its attachment's sequence number (the state's tick + 1).
+
+use skill_robot::plant::Observation;
+use skill_ros::msgs::{Float64MultiArray, MultiArrayDimension};
+
+/// The blocks of a state, in order, with their lengths for `dof` joints.
+fn state_blocks(dof: usize) -> [(&'static str, usize); 11] {
+    [
+        ("tick", 1),
+        ("t", 1),
+        ("q", dof),
+        ("qd", dof),
+        ("wrench_sensor", 6),
+        ("wrench_base", 6),
+        ("arm_contact_n", 1),
+        ("arm_contact_link", 1),
+        ("round_trip_us", 1),
+        ("late", 1),
+        ("period_us", 1),
+    ]
+}
+
+/// The label of a command's one block.
+pub const COMMAND_BLOCK: &str = "effort";
+
+/// The plant's state at one tick, as published.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    /// Ticks stepped since the plant started.
+    pub tick: u64,
+    /// What the controller sees.
+    pub obs: Observation,
+    /// Publish of the previous state to the arrival of its command, µs (NaN when none came).
+    pub round_trip_us: f64,
+    /// Whether the plant held the last command for this tick (realtime only).
+    pub late: bool,
+    /// The plant's real time since its previous tick, µs (NaN in lockstep).
+    pub period_us: f64,
+}
+
+/// Why a message is not what this side expects.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct WireError(pub String);
+
+impl State {
+    /// The array the plant publishes.
+    pub fn encode(&self) -> Float64MultiArray {
+        let dof = self.obs.q.len();
+        let obs = &self.obs;
+        let mut data = Vec::with_capacity(2 * dof + 20);
+        data.push(self.tick as f64);
+        data.push(obs.t);
+        data.extend_from_slice(obs.q.as_slice());
+        data.extend_from_slice(obs.qd.as_slice());
+        data.extend_from_slice(obs.wrench_sensor.as_slice());
+        data.extend_from_slice(obs.wrench_base.as_slice());
+        data.push(obs.arm_contact_n);
+        data.push(obs.arm_contact_link.map_or(-1.0, |link| link as f64));
+        data.push(self.round_trip_us);
+        data.push(if self.late { 1.0 } else { 0.0 });
+        data.push(self.period_us);
+        Float64MultiArray {
+            dim: state_blocks(dof)
+                .iter()
+                .map(|(label, size)| MultiArrayDimension {
+                    label: (*label).to_owned(),
+                    size: *size as u32,
+                    stride: *size as u32,
+                })
+                .collect(),
+            data_offset: 0,
+            data,
+        }
+    }
+
+    /// Reads a state for a robot with `dof` joints, checking every block's label and length.
+    pub fn decode(array: &Float64MultiArray, dof: usize) -> Result<State, WireError> {
+        let blocks = state_blocks(dof);
+        let labels: Vec<(&str, usize)> = array
+            .dim
+            .iter()
+            .map(|dim| (dim.label.as_str(), dim.size as usize))
+            .collect();
+        if labels != blocks {
+            return Err(WireError(format!(
+                "a state's blocks are {labels:?}, not the {blocks:?} of a {dof}-joint plant: is the plant serving \
+                 another robot?"
+            )));
+        }
+        let total: usize = blocks.iter().map(|(_, size)| size).sum();
+        if array.data_offset != 0 || array.data.len() != total {
+            return Err(WireError(format!(
+                "a state holds {} numbers from offset {}, not {total} from 0",
+                array.data.len(),
+                array.data_offset
+            )));
+        }
+        let mut at = 0;
+        let mut take = |n: usize| {
+            let block = &array.data[at..at + n];
+            at += n;
+            block
+        };
+        let tick = take(1)[0];
+        let t = take(1)[0];
+        let mut obs = Observation::zeros(dof);
+        obs.t = t;
+        obs.q.as_mut_slice().copy_from_slice(take(dof));
+        obs.qd.as_mut_slice().copy_from_slice(take(dof));
+        obs.wrench_sensor.as_mut_slice().copy_from_slice(take(6));
+        obs.wrench_base.as_mut_slice().copy_from_slice(take(6));
+        obs.arm_contact_n = take(1)[0];
+        let link = take(1)[0];
+        obs.arm_contact_link = (link >= 0.0).then_some(link as usize);
+        let round_trip_us = take(1)[0];
+        let late = take(1)[0] != 0.0;
+        let period_us = take(1)[0];
+        if !(tick >= 0.0 && tick.fract() == 0.0 && tick < 2f64.powi(53)) {
+            return Err(WireError(format!("a state's tick is {tick}, not a whole number")));
+        }
+        Ok(State {
+            tick: tick as u64,
+            obs,
+            round_trip_us,
+            late,
+            period_us,
+        })
+    }
+}
+
+/// A command's array: the joint torques, N m, in URDF order.
+pub fn encode_command(torques: &[f64]) -> Float64MultiArray {
+    Float64MultiArray {
+        dim: vec![MultiArrayDimension {
+            label: COMMAND_BLOCK.to_owned(),
+            size: torques.len() as u32,
+            stride: torques.len() as u32,
+        }],
+        data_offset: 0,
+        data: torques.to_vec(),
+    }
+}
+
+/// The torques of a command for a plant with `dof` joints (any layout, as a ROS 2 controller
+/// may write it, as long as it holds `dof` numbers after its offset).
+pub fn decode_command(array: &Float64MultiArray, dof: usize) -> Result<&[f64], WireError> {
+    let offset = array.data_offset as usize;
+    match array.data.get(offset..) {
+        Some(torques) if torques.len() == dof => Ok(torques),
+        _ => Err(WireError(format!(
+            "a torque command holds {} numbers after offset {offset}; the arm has {dof} joints",
+            array.data.len()
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DVector, Vector6};
+
+    fn state(dof: usize) -> State {
+        State {
+            tick: 1234,
+            obs: Observation {
+                t: 1.234,
+                q: DVector::from_fn(dof, |i, _| 0.1 * i as f64 - 0.3),
+                qd: DVector::from_fn(dof, |i, _| -0.01 * i as f64),
+                wrench_sensor: Vector6::new(1.0, -2.0, 3.5, 0.1, 0.2, -0.3),
+                wrench_base: Vector6::new(-1.0, 2.0, -3.5, 0.4, 0.5, 0.6),
+                arm_contact_n: 12.5,
+                arm_contact_link: Some(3),
+            },
+            round_trip_us: 87.5,
+            late: true,
+            period_us: f64::NAN,
+        }
+    }
+
+    #[test]
+    fn states_round_trip_through_cdr_bit_for_bit() {
+        let sent = state(7);
+        let bytes = sent.encode().encode();
+        let got = State::decode(&Float64MultiArray::decode(&bytes).expect("cdr"), 7).expect("state");
+        assert_eq!(got.tick, sent.tick);
+        assert_eq!(got.obs, sent.obs);
+        assert_eq!(got.round_trip_us, sent.round_trip_us);
+        assert!(got.late && got.period_us.is_nan());
+        let mut none = sent.clone();
+        none.obs.arm_contact_link = None;
+        let got = State::decode(&none.encode(), 7).expect("state");
+        assert_eq!(got.obs.arm_contact_link, None);
+    }
+
+    #[test]
+    fn a_state_of_another_robot_is_named() {
+        let err = State::decode(&state(6).encode(), 7).expect_err("6 joints are not 7");
+        assert!(err.0.contains("7-joint plant"), "{err}");
+        let mut short = state(7).encode();
+        short.data.pop();
+        assert!(State::decode(&short, 7).is_err());
+    }
+
+    #[test]
+    fn commands_read_with_their_offset() {
+        let torques = [1.0, -2.0, 3.0];
+        let array = encode_command(&torques);
+        assert_eq!(decode_command(&array, 3).expect("3"), torques);
+        assert!(decode_command(&array, 7).is_err());
+        let padded = Float64MultiArray {
+            dim: Vec::new(),
+            data_offset: 1,
+            data: vec![9.0, 1.0, -2.0, 3.0],
+        };
+        assert_eq!(decode_command(&padded, 3).expect("offset"), torques);
+    }
+}

@@ -107,6 +107,15 @@ pub trait Plant {
     /// Advances the plant by `dt` seconds (1 ms in skillc).
     fn step(&mut self, dt: f64) -> Result<(), PlantError>;
 
+    /// The supervisor is bringing the arm to its damped stop ([`crate::robot::Robot::damped_stop_torques`]).
+    /// A plant that can hold that stop by itself, at its own rate and without a link's delay in
+    /// the loop (a plant in another process), does so from now until the run ends, ignoring the
+    /// torques applied, and returns `true`; a plant in this process returns `false` and goes on
+    /// taking the supervisor's torques.
+    fn hold_damped_stop(&mut self) -> bool {
+        false
+    }
+
     /// What the plant's contact witness found since the last call (and starts it afresh): a
     /// simulation checks every step's contact force on the tool against the analytic distance
     /// between the tool and the scene's shapes. `None` for plants without one (a real arm, the

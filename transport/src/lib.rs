@@ -1,5 +1,5 @@
 //! The plant and the run in separate processes or machines, over Zenoh on the wire format of ROS 2's
-//! `rmw_zenoh`: [`serve`] serves a [`Plant`](skill_robot::plant::Plant) (the simulated arm) and
+//! `rmw_zenoh`: [`serve()`] serves a [`Plant`](skill_robot::plant::Plant) (the simulated arm) and
 //! [`RemotePlant`] is a `Plant` whose arm is on the other side, so the skill engine and its
 //! controller run unchanged against either.
 //!

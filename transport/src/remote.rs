@@ -1,8 +1,9 @@
-//! A [`Plant`] whose arm is served by another process ([`crate::serve`]): each step publishes the
+//! A [`Plant`] whose arm is served by another process ([`mod@crate::serve`]): each step publishes the
 //! torques, numbered with the tick of the state they answer, and waits for the plant's next state.
 //! In lockstep that state is the plant's next tick, exactly as in one process; in realtime it is
-//! whatever the plant's own clock reached (the newest state, later ones skipped), and the loop's
-//! timing as the plant measured it is gathered in [`LoopStats`].
+//! the next state the plant's own clock published (in order, none skipped, so the controller's
+//! clock stays the plant's), and the loop's timing as the plant measured it is gathered in
+//! [`LoopStats`].
 
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -60,7 +61,7 @@ pub struct LoopStats {
     pub ticks: u64,
     /// Ticks for which the plant held the last torques.
     pub late: u64,
-    /// States the run skipped because a newer one had come (realtime).
+    /// States the plant published that the run never saw (realtime; 0 unless the link lost some).
     pub skipped: u64,
     /// Publish of a state to the arrival of its command, µs, per tick that had one.
     pub round_trips_us: Vec<f64>,
@@ -124,6 +125,8 @@ pub struct RemotePlant {
     /// When the last state came, and the period the run steps by.
     last_arrival: Option<Instant>,
     period_s: f64,
+    /// The supervisor's damped stop is on: the plant holds it itself.
+    stopping: bool,
 }
 
 impl std::fmt::Debug for RemotePlant {
@@ -164,6 +167,7 @@ impl RemotePlant {
             options,
             last_arrival: None,
             period_s: 1e-3,
+            stopping: false,
         })
     }
 
@@ -234,7 +238,8 @@ fn start(session: &Session, options: &RemoteOptions, dof: usize) -> Result<State
                 what: format!("asking `{key}`"),
                 reason: err.to_string(),
             })?;
-        while let Ok(reply) = replies.recv() {
+        // The first answer decides (one plant serves a domain's start key).
+        if let Ok(reply) = replies.recv() {
             let mismatch = |reason: String| TransportError::Mismatch {
                 endpoint: options.endpoint.clone(),
                 reason,
@@ -286,13 +291,18 @@ impl Plant for RemotePlant {
         Ok(())
     }
 
+    fn hold_damped_stop(&mut self) -> bool {
+        self.stopping = true;
+        true
+    }
+
     fn step(&mut self, dt: f64) -> Result<(), PlantError> {
         self.period_s = dt;
-        let payload = wire::encode_command(&self.torques).encode();
+        let payload = wire::encode_command(&self.torques, self.stopping).encode();
         self.commands
             .put_numbered(payload, self.current.tick as i64 + 1)
             .map_err(|err| self.link_error(err.to_string()))?;
-        let mut state = self.next_state()?;
+        let state = self.next_state()?;
         match self.options.mode {
             LinkMode::Lockstep => {
                 if state.tick != self.current.tick + 1 {
@@ -309,17 +319,11 @@ impl Plant for RemotePlant {
                 }
             }
             LinkMode::Realtime => {
+                // States are taken in order, never skipped: the controller's clock stays the
+                // plant's, one period a step (a run that fell behind catches up; the plant holds
+                // the torques of the ticks whose commands came late).
                 self.stats.nominal_period_us = dt * 1e6;
-                while let Ok(payload) = self.states.try_recv() {
-                    if let Some(newer) = Float64MultiArray::decode(&payload)
-                        .ok()
-                        .and_then(|array| State::decode(&array, self.dof).ok())
-                        .filter(|newer| newer.tick > state.tick)
-                    {
-                        self.stats.skipped += newer.tick - state.tick;
-                        state = newer;
-                    }
-                }
+                self.stats.skipped += state.tick - self.current.tick - 1;
             }
         }
         self.stats.ticks += 1;

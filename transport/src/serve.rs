@@ -76,7 +76,12 @@ enum Pace {
 }
 
 enum Event {
-    Command { torques: Vec<f64>, sequence: Option<i64> },
+    /// Torques, or (`stop`) the plant's own damped stop from now on.
+    Command {
+        torques: Vec<f64>,
+        stop: bool,
+        sequence: Option<i64>,
+    },
     Malformed,
     Start(Query),
 }
@@ -138,13 +143,17 @@ pub fn serve(
     let commands_tx = tx.clone();
     let _commands = ros.subscription(session, COMMANDS, MsgType::Float64MultiArray, move |sample| {
         let (payload, attachment) = node::sample_parts(&sample);
-        let event = match Float64MultiArray::decode(&payload)
-            .ok()
-            .and_then(|array| wire::decode_command(&array, dof).ok().map(<[f64]>::to_vec))
-        {
-            Some(torques) => Event::Command {
+        let sequence = attachment.map(|a| a.sequence);
+        let event = match Float64MultiArray::decode(&payload).ok().and_then(|array| {
+            match wire::decode_command(&array, dof).ok()? {
+                wire::Command::Effort(torques) => Some((torques.to_vec(), false)),
+                wire::Command::DampedStop => Some((Vec::new(), true)),
+            }
+        }) {
+            Some((torques, stop)) => Event::Command {
                 torques,
-                sequence: attachment.map(|a| a.sequence),
+                stop,
+                sequence,
             },
             None => Event::Malformed,
         };
@@ -267,9 +276,16 @@ impl Server<'_> {
     ) -> Result<Pace, TransportError> {
         while !stop.load(Ordering::Relaxed) {
             match rx.recv_timeout(HEARTBEAT) {
-                Ok(Event::Command { torques, .. }) => {
+                Ok(Event::Command { torques, stop, .. }) => {
                     self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
-                    self.step(Some(&torques))?;
+                    if stop {
+                        // The same torques the run's supervisor computes from the same state.
+                        self.damped_stop();
+                        let hold = self.hold.clone();
+                        self.step(Some(&hold))?;
+                    } else {
+                        self.step(Some(&torques))?;
+                    }
                     self.summary.commands += 1;
                     self.summary.ticks += 1;
                     self.publish(outlets, false, f64::NAN)?;
@@ -306,24 +322,51 @@ impl Server<'_> {
         stop: &AtomicBool,
     ) -> Result<Pace, TransportError> {
         let period = Duration::from_secs_f64(self.period_s);
-        // Until the run's first command, hold the arm where it is.
-        self.damped_stop();
-        let hold = self.hold.clone();
-        self.plant.apply(&hold)?;
-        self.torques.copy_from_slice(&hold);
+        // The session's clock starts with the run's first command (its answer to the state the
+        // start query returned): until then the plant stands still, repeating its state, so the
+        // run's preparations (pre-positioning's plan, say) cost it no ticks.
+        let (first, mut run_stopped) = loop {
+            if stop.load(Ordering::Relaxed) {
+                return Ok(Pace::Realtime);
+            }
+            match rx.recv_timeout(HEARTBEAT) {
+                Ok(Event::Command {
+                    torques,
+                    stop: stop_asked,
+                    sequence,
+                }) if sequence == Some(self.tick as i64 + 1) => break (torques, stop_asked),
+                Ok(Event::Command { .. }) => self.summary.dropped += 1,
+                Ok(Event::Malformed) => self.summary.malformed += 1,
+                Ok(Event::Start(query)) => {
+                    if let Some(Pace::Lockstep) = self.start(&query) {
+                        return Ok(Pace::Lockstep);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => self.publish(outlets, false, f64::NAN)?,
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Pace::Realtime),
+            }
+        };
+        self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
+        let mut pending = Some(first);
+        let ticks_before = self.summary.ticks;
         let mut last_tick = Instant::now();
-        let mut next = last_tick + period;
+        let mut next = last_tick;
         let mut last_command = last_tick;
         let mut stopped = false;
         while !stop.load(Ordering::Relaxed) {
-            let mut fresh: Option<Vec<f64>> = None;
+            let mut fresh: Option<Vec<f64>> = pending.take();
             loop {
                 let now = Instant::now();
                 if now >= next {
                     break;
                 }
                 match node::recv_until(rx, next - SPIN, next) {
-                    Ok(Event::Command { torques, sequence }) => {
+                    Ok(Event::Command {
+                        torques,
+                        stop: stop_asked,
+                        sequence,
+                    }) => {
+                        run_stopped |= stop_asked;
                         if sequence == Some(self.tick as i64 + 1) {
                             self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
                             fresh = Some(torques);
@@ -335,10 +378,8 @@ impl Server<'_> {
                     Ok(Event::Start(query)) => match self.start(&query) {
                         Some(Pace::Lockstep) => return Ok(Pace::Lockstep),
                         // A new realtime session: its clock starts now.
-                        Some(Pace::Realtime) => {
-                            next = Instant::now() + period;
-                            last_command = Instant::now();
-                        }
+                        // A new realtime session: its clock starts with its first command.
+                        Some(Pace::Realtime) => return Ok(Pace::Realtime),
                         None => {}
                     },
                     Err(mpsc::RecvTimeoutError::Timeout) => break,
@@ -346,10 +387,25 @@ impl Server<'_> {
                 }
             }
             let now = Instant::now();
-            let period_us = now.duration_since(last_tick).as_secs_f64() * 1e6;
+            // The session's first tick has no period before it.
+            let period_us = if self.summary.ticks == ticks_before {
+                f64::NAN
+            } else {
+                now.duration_since(last_tick).as_secs_f64() * 1e6
+            };
             last_tick = now;
             let late = fresh.is_none();
+            if fresh.is_some() {
+                last_command = now;
+            }
             match fresh {
+                _ if run_stopped => {
+                    self.damped_stop();
+                    let hold = self.hold.clone();
+                    self.step(Some(&hold))?;
+                    self.summary.commands += u64::from(!late);
+                    self.summary.late += u64::from(late);
+                }
                 Some(torques) => {
                     last_command = now;
                     stopped = false;

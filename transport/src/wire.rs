@@ -33,6 +33,18 @@ fn state_blocks(dof: usize) -> [(&'static str, usize); 11] {
 
 /// The label of a command's one block.
 pub const COMMAND_BLOCK: &str = "effort";
+/// The label of a command that asks the plant to hold its own damped stop (the run's supervisor
+/// fired a reflex); its numbers are the torques the run computed, which the plant ignores.
+pub const STOP_BLOCK: &str = "damped_stop";
+
+/// What a command asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Command<'a> {
+    /// These joint torques, N m.
+    Effort(&'a [f64]),
+    /// The plant's own damped stop, from now on.
+    DampedStop,
+}
 
 /// The plant's state at one tick, as published.
 #[derive(Debug, Clone, PartialEq)]
@@ -140,11 +152,11 @@ impl State {
     }
 }
 
-/// A command's array: the joint torques, N m, in URDF order.
-pub fn encode_command(torques: &[f64]) -> Float64MultiArray {
+/// A command's array: the joint torques, N m, in URDF order; `stop` labels it a damped stop.
+pub fn encode_command(torques: &[f64], stop: bool) -> Float64MultiArray {
     Float64MultiArray {
         dim: vec![MultiArrayDimension {
-            label: COMMAND_BLOCK.to_owned(),
+            label: if stop { STOP_BLOCK } else { COMMAND_BLOCK }.to_owned(),
             size: torques.len() as u32,
             stride: torques.len() as u32,
         }],
@@ -153,17 +165,24 @@ pub fn encode_command(torques: &[f64]) -> Float64MultiArray {
     }
 }
 
-/// The torques of a command for a plant with `dof` joints (any layout, as a ROS 2 controller
-/// may write it, as long as it holds `dof` numbers after its offset).
-pub fn decode_command(array: &Float64MultiArray, dof: usize) -> Result<&[f64], WireError> {
+/// A command for a plant with `dof` joints: torques in any layout, as a ROS 2 controller may write
+/// them, as long as they are `dof` numbers after the offset; a damped stop when the first
+/// dimension is labelled [`STOP_BLOCK`].
+pub fn decode_command(array: &Float64MultiArray, dof: usize) -> Result<Command<'_>, WireError> {
     let offset = array.data_offset as usize;
-    match array.data.get(offset..) {
-        Some(torques) if torques.len() == dof => Ok(torques),
-        _ => Err(WireError(format!(
-            "a torque command holds {} numbers after offset {offset}; the arm has {dof} joints",
-            array.data.len()
-        ))),
-    }
+    let torques = match array.data.get(offset..) {
+        Some(torques) if torques.len() == dof => torques,
+        _ => {
+            return Err(WireError(format!(
+                "a torque command holds {} numbers after offset {offset}; the arm has {dof} joints",
+                array.data.len()
+            )))
+        }
+    };
+    Ok(match array.dim.first() {
+        Some(dim) if dim.label == STOP_BLOCK => Command::DampedStop,
+        _ => Command::Effort(torques),
+    })
 }
 
 #[cfg(test)]
@@ -216,14 +235,18 @@ mod tests {
     #[test]
     fn commands_read_with_their_offset() {
         let torques = [1.0, -2.0, 3.0];
-        let array = encode_command(&torques);
-        assert_eq!(decode_command(&array, 3).expect("3"), torques);
+        let array = encode_command(&torques, false);
+        assert_eq!(decode_command(&array, 3).expect("3"), Command::Effort(&torques));
         assert!(decode_command(&array, 7).is_err());
+        assert_eq!(
+            decode_command(&encode_command(&torques, true), 3).expect("3"),
+            Command::DampedStop
+        );
         let padded = Float64MultiArray {
             dim: Vec::new(),
             data_offset: 1,
             data: vec![9.0, 1.0, -2.0, 3.0],
         };
-        assert_eq!(decode_command(&padded, 3).expect("offset"), torques);
+        assert_eq!(decode_command(&padded, 3).expect("offset"), Command::Effort(&torques));
     }
 }

@@ -162,6 +162,9 @@ impl<'p> Rig<'p> {
     fn reflex_stop(&mut self, mut log: Option<&mut RunLog>, dt: f64) -> Result<(), ExecError> {
         let state = log.as_deref_mut().map_or(0, |log| log.state_index("reflex"));
         let steps = (REFLEX_HOLD_S / dt).round() as usize;
+        // A plant across a link holds the stop itself: with the link's delay in the loop the
+        // joint damping could ring (the torques below are still computed, applied and logged).
+        self.plant.hold_damped_stop();
         for step in 0..steps {
             if step > 0 {
                 self.sense();

@@ -97,15 +97,16 @@ mod enabled {
             sensor_frame: scene.spec().robot.sensor.clone(),
         };
         if !verbosity.quiet() {
-            println!(
+            // A closed standard output does not stop the plant: it serves on and says nothing.
+            let _ = crate::out::print_or_code(&format!(
                 "plant: serving `{}` ({}, {} joints) at {} on ROS domain {}: /joint_states, /wrench and \
-                 /skillc/state out, /joint_effort_commands in; Ctrl-C stops",
+                 /skillc/state out, /joint_effort_commands in; Ctrl-C stops\n",
                 scene.file(),
                 robot.name(),
                 robot.dof(),
                 args.listen,
                 args.domain
-            );
+            ));
         }
         let summary = skill_transport::serve(&session, &mut plant, &robot, &options, stop)
             .map_err(|err| Failure::Input(error_chain(&err)))?;

@@ -10,6 +10,16 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+/// `skillc run` of the standard touch on the table, learned from its demonstration.
+const TOUCH: [&str; 6] = [
+    "run",
+    "stdlib-skills/touch.skill",
+    "--demo",
+    "examples/demos/touch.csv",
+    "--scene",
+    "examples/scenes/table.toml",
+];
+
 fn skillc() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_skillc"));
     command.current_dir(env!("CARGO_MANIFEST_DIR"));
@@ -112,16 +122,7 @@ fn lockstep_logs_equal_the_in_process_logs_for_a_skill_and_a_task() {
     let cases: [(&str, Vec<&str>); 2] = [
         (
             "examples/scenes/table.toml",
-            vec![
-                "run",
-                "stdlib-skills/touch.skill",
-                "--demo",
-                "examples/demos/touch.csv",
-                "--scene",
-                "examples/scenes/table.toml",
-                "--set",
-                "table.z+=-0.02",
-            ],
+            [TOUCH.as_slice(), &["--set", "table.z+=-0.02"]].concat(),
         ),
         (
             "examples/scenes/workcell.toml",
@@ -183,17 +184,9 @@ fn realtime_prints_the_loop_and_ends_in_a_verdict() {
     let endpoint = endpoint();
     let plant = Plant::start("examples/scenes/table.toml", &endpoint);
     let began = Instant::now();
-    let output = run(&[
-        "run",
-        "stdlib-skills/touch.skill",
-        "--demo",
-        "examples/demos/touch.csv",
-        "--scene",
-        "examples/scenes/table.toml",
-        "--plant",
-        &endpoint,
-        "--realtime",
-    ]);
+    let mut args = TOUCH.to_vec();
+    args.extend(["--plant", &endpoint, "--realtime"]);
+    let output = run(&args);
     let wall = began.elapsed().as_secs_f64();
     let text = String::from_utf8_lossy(&output.stdout);
     let line = text
@@ -223,16 +216,8 @@ fn realtime_prints_the_loop_and_ends_in_a_verdict() {
 fn without_a_plant_the_run_says_what_to_start() {
     let endpoint = endpoint();
     let output = skillc()
-        .args([
-            "run",
-            "stdlib-skills/touch.skill",
-            "--demo",
-            "examples/demos/touch.csv",
-            "--scene",
-            "examples/scenes/table.toml",
-            "--plant",
-            &endpoint,
-        ])
+        .args(TOUCH)
+        .args(["--plant", &endpoint])
         .output()
         .expect("runs");
     let err = String::from_utf8_lossy(&output.stderr);

@@ -377,7 +377,6 @@ impl Server<'_> {
                     Ok(Event::Malformed) => self.summary.malformed += 1,
                     Ok(Event::Start(query)) => match self.start(&query) {
                         Some(Pace::Lockstep) => return Ok(Pace::Lockstep),
-                        // A new realtime session: its clock starts now.
                         // A new realtime session: its clock starts with its first command.
                         Some(Pace::Realtime) => return Ok(Pace::Realtime),
                         None => {}
@@ -404,7 +403,8 @@ impl Server<'_> {
                     let hold = self.hold.clone();
                     self.step(Some(&hold))?;
                     self.summary.commands += u64::from(!late);
-                    self.summary.late += u64::from(late);
+                    // After the run has gone quiet (it ended), held ticks are not late ones.
+                    self.summary.late += u64::from(late && now.duration_since(last_command) <= options.silence);
                 }
                 Some(torques) => {
                     last_command = now;

@@ -67,6 +67,7 @@ mod enabled {
 
     use skill_runtime::exec::SessionError;
     use skill_runtime::plant::Plant;
+    use skill_runtime::robot::Robot;
     use skill_runtime::sim::RapierPlant;
     use skill_transport::node::{self, Role};
     use skill_transport::{LinkMode, RemoteOptions, RemotePlant, ServeOptions};
@@ -131,12 +132,13 @@ mod enabled {
         Ok(text)
     }
 
-    /// Connects to the plant `link` names and runs `run` on it; the loop's line in realtime.
+    /// Connects to the plant `link` names and runs `run` on it with the scene's robot model (the
+    /// one the plant must match); the loop's line in realtime.
     pub fn run_remote<T>(
         scene: &Scene,
         link: &LinkArgs,
         endpoint: &str,
-        run: impl FnOnce(&mut dyn Plant) -> Result<T, SessionError>,
+        run: impl FnOnce(Robot, &mut dyn Plant) -> Result<T, SessionError>,
     ) -> Result<(T, Option<String>), Failure> {
         node::check_endpoint(endpoint).map_err(|err| Failure::Usage(err.to_string()))?;
         let robot = skill_runtime::exec::scene_robot(scene).map_err(|err| Failure::Input(error_chain(&err)))?;
@@ -156,7 +158,7 @@ mod enabled {
             },
         };
         let mut plant = RemotePlant::connect(options, robot.dof()).map_err(|err| Failure::Input(error_chain(&err)))?;
-        let result = run(&mut plant).map_err(|err| Failure::Input(error_chain(&err)))?;
+        let result = run(robot, &mut plant).map_err(|err| Failure::Input(error_chain(&err)))?;
         let line = (mode == LinkMode::Realtime).then(|| plant.stats().line());
         Ok((result, line))
     }

@@ -92,12 +92,12 @@ pub struct RunArgs {
     pub link: crate::link::LinkArgs,
 }
 
-/// Runs on the plant `--plant` names (`remote`), or simulates here (`here`); the link's line
-/// when the run printed one.
+/// Runs on the plant `--plant` names (`remote`, given the scene's robot model), or simulates
+/// here (`here`); the link's line when the run printed one.
 fn on_plant_or_here<T>(
     scene: &skill_runtime::sim::Scene,
     link: &crate::link::LinkArgs,
-    remote: impl FnOnce(&mut dyn skill_runtime::plant::Plant) -> Result<T, SessionError>,
+    remote: impl FnOnce(skill_runtime::robot::Robot, &mut dyn skill_runtime::plant::Plant) -> Result<T, SessionError>,
     here: impl FnOnce() -> Result<T, SessionError>,
 ) -> Result<(T, Option<String>), Failure> {
     let Some(endpoint) = &link.plant else {
@@ -230,7 +230,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     let ((report, log), link_line) = on_plant_or_here(
         &scene,
         &args.link,
-        |plant| run_on_plant(&scene, plant, mode, &options),
+        |robot, plant| run_on_plant(&scene, robot, plant, mode, &options),
         || simulate(&scene, mode, &options),
     )?;
     if let Some(path) = &args.output {
@@ -493,7 +493,7 @@ fn run_task(
     let (run, link_line) = on_plant_or_here(
         &scene,
         &args.link,
-        |plant| run_task_on_plant(&scene, plant, &steps, &fallbacks, &options),
+        |robot, plant| run_task_on_plant(&scene, robot, plant, &steps, &fallbacks, &options),
         || simulate_task(&scene, &steps, &fallbacks, &options),
     )?;
     if let Some(path) = &args.output {

@@ -4,7 +4,7 @@
 //! attachment ([`skill_ros::rmw`]).
 
 use std::sync::atomic::{AtomicI64, Ordering};
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
 use skill_ros::msgs::MsgType;
 use skill_ros::rmw::{self, Attachment, Entity, NodeName};
@@ -227,11 +227,6 @@ pub fn sample_parts(sample: &Sample) -> (Vec<u8>, Option<Attachment>) {
         .attachment()
         .and_then(|bytes| Attachment::decode(&bytes.to_bytes()));
     (payload, attachment)
-}
-
-/// How long a sleep of at most `limit` may last until `deadline`.
-pub fn until(deadline: std::time::Instant, limit: Duration) -> Duration {
-    deadline.saturating_duration_since(std::time::Instant::now()).min(limit)
 }
 
 /// Closes `session`: its liveliness tokens go at once, so ROS 2 tools see the node leave.

@@ -115,7 +115,7 @@ pub struct RemotePlant {
     _subscription: Subscriber<()>,
     commands: RosPublisher,
     _node: Node,
-    session: Session,
+    _session: Session,
     states: mpsc::Receiver<Vec<u8>>,
     options: RemoteOptions,
     dof: usize,
@@ -155,7 +155,7 @@ impl RemotePlant {
             _subscription: subscription,
             commands,
             _node: ros,
-            session,
+            _session: session,
             states,
             dof,
             torques: vec![0.0; dof],
@@ -174,11 +174,6 @@ impl RemotePlant {
     /// The loop's figures so far.
     pub fn stats(&self) -> &LoopStats {
         &self.stats
-    }
-
-    /// The Zenoh session (for tests that listen in).
-    pub fn session(&self) -> &Session {
-        &self.session
     }
 
     fn link_error(&self, reason: String) -> PlantError {

@@ -280,9 +280,7 @@ impl Server<'_> {
                     self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
                     if stop {
                         // The same torques the run's supervisor computes from the same state.
-                        self.damped_stop();
-                        let hold = self.hold.clone();
-                        self.step(Some(&hold))?;
+                        self.step_damped_stop()?;
                     } else {
                         self.step(Some(&torques))?;
                     }
@@ -303,8 +301,9 @@ impl Server<'_> {
         Ok(Pace::Lockstep)
     }
 
-    /// The damped stop's torques at the current state, into `hold`.
-    fn damped_stop(&mut self) {
+    /// One step under the damped stop, its torques computed at the current state (the same
+    /// function and state as the run's supervisor, so lockstep stays bit for bit).
+    fn step_damped_stop(&mut self) -> Result<(), TransportError> {
         self.plant.observe_into(&mut self.obs);
         self.robot.damped_stop_torques(
             &mut self.data,
@@ -312,6 +311,10 @@ impl Server<'_> {
             self.obs.qd.as_slice(),
             &mut self.hold,
         );
+        let hold = std::mem::take(&mut self.hold);
+        let stepped = self.step(Some(&hold));
+        self.hold = hold;
+        stepped
     }
 
     fn realtime(
@@ -399,15 +402,12 @@ impl Server<'_> {
             }
             match fresh {
                 _ if run_stopped => {
-                    self.damped_stop();
-                    let hold = self.hold.clone();
-                    self.step(Some(&hold))?;
+                    self.step_damped_stop()?;
                     self.summary.commands += u64::from(!late);
                     // After the run has gone quiet (it ended), held ticks are not late ones.
                     self.summary.late += u64::from(late && now.duration_since(last_command) <= options.silence);
                 }
                 Some(torques) => {
-                    last_command = now;
                     stopped = false;
                     self.step(Some(&torques))?;
                     self.summary.commands += 1;
@@ -417,9 +417,7 @@ impl Server<'_> {
                         self.summary.damped_stops += 1;
                         stopped = true;
                     }
-                    self.damped_stop();
-                    let hold = self.hold.clone();
-                    self.step(Some(&hold))?;
+                    self.step_damped_stop()?;
                 }
                 None => {
                     self.summary.late += 1;

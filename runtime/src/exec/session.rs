@@ -39,16 +39,18 @@ pub fn simulate(scene: &Scene, mode: Mode<'_, '_>, options: &ExecOptions) -> Res
     with_rig(scene, |rig| simulate_on(rig, mode, options))
 }
 
-/// Runs `mode` on `plant`, an arm the scene's robot models that is not simulated here (a plant in
-/// another process, over `skill-transport`): the controller is the one [`simulate`] builds, from
-/// the scene's robot and wrist sensor and the plant's first state.
+/// Runs `mode` on `plant`, an arm that `robot` (the scene's, [`scene_robot`]) models and that is
+/// not simulated here (a plant in another process, over `skill-transport`): the controller is
+/// the one [`simulate`] builds, from that robot, the scene's wrist sensor and the plant's first
+/// state.
 pub fn run_on_plant(
     scene: &Scene,
+    robot: Robot,
     plant: &mut dyn Plant,
     mode: Mode<'_, '_>,
     options: &ExecOptions,
 ) -> Result<(RunReport, RunLog), SessionError> {
-    with_plant_rig(scene, plant, |rig| simulate_on(rig, mode, options))
+    with_plant_rig(scene, robot, plant, |rig| simulate_on(rig, mode, options))
 }
 
 /// Builds the scene's simulation, the controller (null space pulled to the start
@@ -63,10 +65,10 @@ fn with_rig<T>(scene: &Scene, run: impl FnOnce(&mut Rig<'_>) -> Result<T, Sessio
 /// [`with_rig`] on a plant that is not built here.
 fn with_plant_rig<T>(
     scene: &Scene,
+    robot: Robot,
     plant: &mut dyn Plant,
     run: impl FnOnce(&mut Rig<'_>) -> Result<T, SessionError>,
 ) -> Result<T, SessionError> {
-    let robot = scene_robot(scene)?;
     let controller = controller_at(scene, robot, plant.observe().q.as_slice())?;
     let mut rig = Rig::new(plant, controller, &scene.spec().robot.sensor)?;
     run(&mut rig)
@@ -166,12 +168,13 @@ pub fn simulate_task(
 /// [`simulate_task`] on a plant that is not simulated here (see [`run_on_plant`]).
 pub fn run_task_on_plant(
     scene: &Scene,
+    robot: Robot,
     plant: &mut dyn Plant,
     steps: &[TaskStep<'_, '_>],
     fallbacks: &[TaskStep<'_, '_>],
     options: &ExecOptions,
 ) -> Result<TaskRun, SessionError> {
-    with_plant_rig(scene, plant, |rig| task_on(rig, steps, fallbacks, options))
+    with_plant_rig(scene, robot, plant, |rig| task_on(rig, steps, fallbacks, options))
 }
 
 fn task_on(

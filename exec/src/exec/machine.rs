@@ -106,6 +106,9 @@ pub(super) struct Machine<'b, 'a> {
     captures: HashMap<String, Isometry3<f64>>,
     /// The current state's watch over its contact (see [`ContactWatch`]).
     contact: ContactWatch,
+    /// The measured contact normal the current state's compliant frame follows, if it does
+    /// (see [`NormalFollow`]).
+    follow: Option<NormalFollow>,
 }
 
 /// How long the force of a state that pushes while it moves may stay below half its desired
@@ -220,6 +223,83 @@ const LIFT_OFF_SPEED_MPS: f64 = GUARD_SPEED_MPS;
 /// The applied force above which a state is entered in contact \[N\] (several times the wrist
 /// sensor's noise).
 const IN_CONTACT_N: f64 = 1.0;
+
+/// The compliant frame of a state that moves while it pushes along its z (a contour, a slide, a
+/// wipe) follows the contact normal the wrist measures (docs/method.md §7, following the
+/// normal): its learned orientation is turned by the smallest rotation that takes its z onto
+/// the direction the tool pushes, with the friction taken out along the tool's velocity. A
+/// learned frame holds the demonstrated surface's directions, sample by sample; a drum moved
+/// 2 cm sideways or a table tilted 8° has other normals under the same path, and force control
+/// along a z 10-30° off them leaks the position loop's stiffness into the force.
+#[derive(Debug, Clone, Copy)]
+struct NormalFollow {
+    /// The frame followed (the state's compliant frame).
+    frame: ir::FrameRef,
+    /// The estimate: the unit direction the tool pushes the surface along, base frame; `None`
+    /// until the state's first command.
+    z: Option<Vector3<f64>>,
+    /// Run time of the last update \[s\].
+    last_s: f64,
+}
+
+/// The time constant of the normal estimate \[s\]: several periods of a hand's 8-12 Hz tremor
+/// and of the sensor's noise, a few millimetres of stroke at the shipped 5-10 cm/s.
+const FOLLOW_TAU_S: f64 = 0.08;
+
+/// The slowest tool speed at which the normal estimate is updated \[m/s\]: friction acts along
+/// the sliding direction only while the tool slides; at a stroke's reversal it may point
+/// anywhere in the tangent plane, up to the friction coefficient times the normal force.
+const FOLLOW_MIN_SPEED_MPS: f64 = 0.01;
+
+/// The least force the tool must push along the estimate for it to be updated \[N\].
+const FOLLOW_MIN_FORCE_N: f64 = 2.0;
+
+/// The most the followed z may turn away from the learned one \[rad\] (30°): a surface that
+/// turns farther is another task, and the estimate is not trusted to lead the frame there.
+const FOLLOW_MAX_TILT_RAD: f64 = std::f64::consts::FRAC_PI_6;
+
+impl NormalFollow {
+    /// The frame a state follows, if it does: a learned frame placed at the tool (its
+    /// orientation learned from a surface or a force), of a state with a motion and a desired
+    /// force, force-controlled along z and position-controlled along x and y.
+    fn of(bound: &BoundSkill<'_>, active: &ir::ActiveState, t: f64) -> Option<NormalFollow> {
+        active.motion?;
+        active.force?;
+        let [x, y, z, ..] = active.position_controlled;
+        let ir::FrameRef::Learned(id) = active.frame else { return None };
+        let at_tool = bound.frames[id.index()].kind().origin() == crate::skill::FrameOrigin::AtTool;
+        (x && y && !z && at_tool).then_some(NormalFollow {
+            frame: active.frame,
+            z: None,
+            last_s: t,
+        })
+    }
+
+    /// Updates the estimate at run time `t` from the applied force and the tool's velocity (base
+    /// frame), with `learned_z` the learned frame's z now; returns the estimate.
+    fn update(&mut self, t: f64, applied: &Vector3<f64>, velocity: &Vector3<f64>, learned_z: &Vector3<f64>) -> Vector3<f64> {
+        let dt = (t - self.last_s).max(0.0);
+        self.last_s = t;
+        let mut z = self.z.unwrap_or(*learned_z);
+        let speed = velocity.norm();
+        if applied.dot(&z) > FOLLOW_MIN_FORCE_N && speed > FOLLOW_MIN_SPEED_MPS {
+            let sliding = velocity / speed;
+            let pushing = applied - sliding * applied.dot(&sliding);
+            if let Some(measured) = pushing.try_normalize(1e-9) {
+                let alpha = dt / (FOLLOW_TAU_S + dt);
+                z = (z + (measured - z) * alpha).try_normalize(1e-12).unwrap_or(z);
+            }
+        }
+        let tilt = learned_z.angle(&z);
+        if tilt > FOLLOW_MAX_TILT_RAD {
+            if let Some(turn) = UnitQuaternion::rotation_between(learned_z, &z) {
+                z = turn.powf(FOLLOW_MAX_TILT_RAD / tilt) * learned_z;
+            }
+        }
+        self.z = Some(z);
+        z
+    }
+}
 
 /// How long the desired force takes to ramp from the force applied when force control begins
 /// to the state's own \[s\]: a step in the desired force is a step in the commanded torques.
@@ -404,6 +484,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             found_offset: Vector3::zeros(),
             captures: HashMap::new(),
             contact: ContactWatch::default(),
+            follow: None,
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -452,6 +533,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.clock_rate = 1.0;
         self.hold_timers.clear();
         self.contact = ContactWatch::default();
+        self.follow = None;
         let flange = rig.flange();
         self.held = flange;
         self.entry_tool = rig.tool();
@@ -460,6 +542,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             self.captures.insert(name.clone(), self.entry_tool);
         }
         self.guarded = guarded_approach(self.skill(), active);
+        self.follow = NormalFollow::of(self.bound, active, t);
         let applied = rig.controller.state().applied.fixed_rows::<3>(0).into_owned();
         let forcing = active.position_controlled.contains(&false);
         if forcing && !was_forcing {
@@ -643,12 +726,33 @@ impl<'b, 'a> Machine<'b, 'a> {
                     .map_or(self.overrides.speed_factor, |m| m.rollout.speed);
                 let elapsed = clock * speed;
                 let pose = learned.at(elapsed);
+                let rotation = match self.follow {
+                    Some(NormalFollow { frame: followed, z: Some(z), .. }) if followed == frame => {
+                        let learned_z = pose.rotation * Vector3::z();
+                        UnitQuaternion::rotation_between(&learned_z, &z).map_or(pose.rotation, |turn| turn * pose.rotation)
+                    }
+                    _ => pose.rotation,
+                };
                 match learned.kind().origin() {
-                    crate::skill::FrameOrigin::Learned => pose,
-                    crate::skill::FrameOrigin::AtTool => at_tool(pose.rotation),
+                    crate::skill::FrameOrigin::Learned => Isometry3::from_parts(pose.translation, rotation),
+                    crate::skill::FrameOrigin::AtTool => at_tool(rotation),
                 }
             }
         }
+    }
+
+    /// Updates the contact normal the current state's frame follows, if it follows one.
+    fn follow_normal(&mut self, rig: &Rig<'_>, t: f64) {
+        let Some(mut follow) = self.follow else { return };
+        // The learned frame's own z now: the estimate is turned from it.
+        let learned = NormalFollow { z: None, ..follow };
+        self.follow = Some(learned);
+        let learned_z = self.frame_pose(follow.frame, rig, t).rotation * Vector3::z();
+        let state = rig.controller.state();
+        let applied = state.applied.fixed_rows::<3>(0).into_owned();
+        let velocity = state.twist.fixed_rows::<3>(0).into_owned();
+        follow.update(t, &applied, &velocity, &learned_z);
+        self.follow = Some(follow);
     }
 
     fn axis_vector(&self, along: &ir::FrameAxis, rig: &Rig<'_>) -> Vector3<f64> {
@@ -998,6 +1102,7 @@ impl<'b, 'a> Machine<'b, 'a> {
                 twist = Vector6::new(v.x, v.y, v.z, 0.0, 0.0, 0.0);
             }
         }
+        self.follow_normal(rig, t);
         let frame = self.frame_pose(active.frame, rig, t);
         let scale = self.overrides.force_scale;
         let z = frame.rotation * Vector3::z();

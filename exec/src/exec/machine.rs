@@ -266,7 +266,9 @@ impl NormalFollow {
         active.motion?;
         active.force?;
         let [x, y, z, ..] = active.position_controlled;
-        let ir::FrameRef::Learned(id) = active.frame else { return None };
+        let ir::FrameRef::Learned(id) = active.frame else {
+            return None;
+        };
         let at_tool = bound.frames[id.index()].kind().origin() == crate::skill::FrameOrigin::AtTool;
         (x && y && !z && at_tool).then_some(NormalFollow {
             frame: active.frame,
@@ -277,7 +279,13 @@ impl NormalFollow {
 
     /// Updates the estimate at run time `t` from the applied force and the tool's velocity (base
     /// frame), with `learned_z` the learned frame's z now; returns the estimate.
-    fn update(&mut self, t: f64, applied: &Vector3<f64>, velocity: &Vector3<f64>, learned_z: &Vector3<f64>) -> Vector3<f64> {
+    fn update(
+        &mut self,
+        t: f64,
+        applied: &Vector3<f64>,
+        velocity: &Vector3<f64>,
+        learned_z: &Vector3<f64>,
+    ) -> Vector3<f64> {
         let dt = (t - self.last_s).max(0.0);
         self.last_s = t;
         let mut z = self.z.unwrap_or(*learned_z);
@@ -727,9 +735,14 @@ impl<'b, 'a> Machine<'b, 'a> {
                 let elapsed = clock * speed;
                 let pose = learned.at(elapsed);
                 let rotation = match self.follow {
-                    Some(NormalFollow { frame: followed, z: Some(z), .. }) if followed == frame => {
+                    Some(NormalFollow {
+                        frame: followed,
+                        z: Some(z),
+                        ..
+                    }) if followed == frame => {
                         let learned_z = pose.rotation * Vector3::z();
-                        UnitQuaternion::rotation_between(&learned_z, &z).map_or(pose.rotation, |turn| turn * pose.rotation)
+                        UnitQuaternion::rotation_between(&learned_z, &z)
+                            .map_or(pose.rotation, |turn| turn * pose.rotation)
                     }
                     _ => pose.rotation,
                 };

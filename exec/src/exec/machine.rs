@@ -1292,4 +1292,85 @@ mod tests {
         assert!(!timers.update((0, 0), true, 0.15, 0.1));
         assert!(timers.update((0, 0), true, 0.25, 0.1));
     }
+
+    /// A follower of a frame whose learned z points down, as a table's contact frame does.
+    fn follower() -> NormalFollow {
+        NormalFollow {
+            frame: ir::FrameRef::Base,
+            z: None,
+            last_s: 0.0,
+        }
+    }
+
+    /// Feeds `follow` `ticks` 1 ms ticks of the same wrench and velocity; returns the estimate.
+    fn feed(
+        follow: &mut NormalFollow,
+        ticks: usize,
+        applied: Vector3<f64>,
+        velocity: Vector3<f64>,
+        learned_z: Vector3<f64>,
+    ) -> Vector3<f64> {
+        let t0 = follow.last_s;
+        let mut z = learned_z;
+        for k in 1..=ticks {
+            z = follow.update(t0 + k as f64 * 1e-3, &applied, &velocity, &learned_z);
+        }
+        z
+    }
+
+    /// A surface whose normal is turned `tilt` about x from straight down, pushed with 10 N along
+    /// it while sliding at 5 cm/s along its tangent with friction 0.4: the direction the tool
+    /// pushes, the force it applies and its velocity.
+    fn tilted_contact(tilt: f64, speed: f64) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        let turn = UnitQuaternion::from_euler_angles(tilt, 0.0, 0.0);
+        let normal = turn * -Vector3::z();
+        let tangent = turn * Vector3::x();
+        let applied = normal * 10.0 + tangent * (0.4 * 10.0);
+        (normal, applied, tangent * speed)
+    }
+
+    #[test]
+    fn the_followed_normal_converges_on_the_surface_with_the_friction_taken_out() {
+        let learned_z = -Vector3::z();
+        let tilt = 10f64.to_radians();
+        let (normal, applied, velocity) = tilted_contact(tilt, 0.05);
+        let mut follow = follower();
+        // One time constant: the discrete low-pass has covered about 1 - 1/e of the turn.
+        let z = feed(&mut follow, 80, applied, velocity, learned_z);
+        let covered = learned_z.angle(&z) / tilt;
+        assert!((covered - (1.0 - (-1f64).exp())).abs() < 0.03, "covered {covered}");
+        // Ten time constants: on the normal, not on the force (friction tilts that by 21.8°).
+        let z = feed(&mut follow, 720, applied, velocity, learned_z);
+        assert!(z.angle(&normal) < 1e-3, "{:.4} rad off the normal", z.angle(&normal));
+        assert!(applied.angle(&normal) > 0.35);
+        assert!((z.norm() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_followed_normal_holds_while_the_tool_barely_moves_or_barely_pushes() {
+        let learned_z = -Vector3::z();
+        let tilt = 10f64.to_radians();
+        // At a stroke's reversal (5 mm/s) the friction may point anywhere: no update.
+        let (_, applied, slow) = tilted_contact(tilt, 0.5 * FOLLOW_MIN_SPEED_MPS);
+        let mut follow = follower();
+        assert_eq!(feed(&mut follow, 500, applied, slow, learned_z), learned_z);
+        // Off the surface, or barely touching it: no update.
+        let (_, _, velocity) = tilted_contact(tilt, 0.05);
+        let light = applied * (0.9 * FOLLOW_MIN_FORCE_N / applied.dot(&learned_z));
+        assert_eq!(feed(&mut follow, 500, light, velocity, learned_z), learned_z);
+        let pulling = -applied;
+        assert_eq!(feed(&mut follow, 500, pulling, velocity, learned_z), learned_z);
+    }
+
+    #[test]
+    fn the_followed_normal_turns_at_most_thirty_degrees_from_the_learned_one() {
+        let learned_z = -Vector3::z();
+        let (normal, applied, velocity) = tilted_contact(50f64.to_radians(), 0.05);
+        let mut follow = follower();
+        let z = feed(&mut follow, 2000, applied, velocity, learned_z);
+        assert!((learned_z.angle(&z) - FOLLOW_MAX_TILT_RAD).abs() < 1e-9);
+        // Turned towards the measured normal, in the plane of the two.
+        assert!(z.dot(&learned_z.cross(&normal)).abs() < 1e-9);
+        assert!(z.angle(&normal) < 20.5f64.to_radians());
+    }
 }

@@ -231,8 +231,8 @@ fn the_contours_frame_follows_the_moved_drums_normal() {
             continue;
         }
         let normal = nalgebra::Vector3::new(axis_x - p.x, 0.0, axis_z - p.z).normalize();
-        // The tool touches the drum: its tip (a 10 mm sphere) on the surface, within a millimetre and
-        // what the contact compliance explains.
+        // The tool touches the drum: its tip (a sphere of 10 mm radius) on the surface, within a
+        // millimetre and what the contact compliance explains.
         let gap = ((p.x - axis_x).hypot(p.z - axis_z) - 0.15 - 0.01).abs();
         assert!(
             gap < 1e-3 + force.norm() / stiffness,

@@ -501,6 +501,47 @@ pub enum ExprKind {
     Axis(AxisRef),
     /// A bare name.
     Name(Ident),
+    /// `-x`: the negation of a value.
+    Neg(Box<Expr>),
+    /// `a + b - c` or `a * b / c`: operators of one precedence, applied left to right. A chain
+    /// is flat (not nested per operator) so that a long sum costs no depth; a sum inside a
+    /// product (`(a + b) * 2`) is a chain inside a chain.
+    Arith {
+        /// The first operand.
+        first: Box<Expr>,
+        /// Each operator with the operand after it; not empty.
+        rest: Vec<(BinOp, Expr)>,
+    },
+}
+
+/// A binary arithmetic operator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinOp {
+    /// `+`.
+    Add,
+    /// `-`.
+    Sub,
+    /// `*`.
+    Mul,
+    /// `/`.
+    Div,
+}
+
+impl BinOp {
+    /// The operator as written.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            BinOp::Add => "+",
+            BinOp::Sub => "-",
+            BinOp::Mul => "*",
+            BinOp::Div => "/",
+        }
+    }
+
+    /// Whether it is `+` or `-` (binding looser than `*` and `/`).
+    pub fn is_additive(self) -> bool {
+        matches!(self, BinOp::Add | BinOp::Sub)
+    }
 }
 
 /// A number literal, kept as written so the formatter does not change `1.50` to `1.5`.

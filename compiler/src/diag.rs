@@ -86,6 +86,9 @@ codes! {
     UnitMismatch => "skill::check::unit_mismatch", Error;
     /// A physical value written without a unit: `timeout 5`.
     MissingUnit => "skill::check::missing_unit", Error;
+    /// Arithmetic that has no value: a product or quotient of two quantities (`2 mm * 3 mm`), a
+    /// division by zero, or arithmetic on a name that is not a parameter (`2 * contact`).
+    BadArithmetic => "skill::check::bad_arithmetic", Error;
     /// A value outside its valid range: `dmp(segment 1, basis: 0)`.
     OutOfRange => "skill::check::out_of_range", Error;
     /// A segment beyond what the segmentation yields: `segment 3` with `segments = max_force`.

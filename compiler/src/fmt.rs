@@ -457,6 +457,36 @@ fn expr(e: &Expr) -> String {
         ExprKind::Call { name, args: list } => format!("{}({})", name.name, args(list)),
         ExprKind::Axis(axis) => format!("{}.{}", axis.frame.name, axis.axis.name),
         ExprKind::Name(name) => name.name.clone(),
+        ExprKind::Neg(inner) => {
+            let text = expr(inner);
+            // `-(a + b)`, and `-(-4 mm)` rather than `--4 mm`.
+            if matches!(inner.kind, ExprKind::Arith { .. }) || text.starts_with('-') {
+                format!("-({text})")
+            } else {
+                format!("-{text}")
+            }
+        }
+        ExprKind::Arith { first, rest } => {
+            // The tree keeps no parentheses: a chain inside a chain was grouped by them, and
+            // gets them back where leaving them out would change its meaning.
+            let additive = rest.first().is_some_and(|(op, _)| op.is_additive());
+            let operand = |e: &Expr, leading: bool| match &e.kind {
+                ExprKind::Arith { rest: inner, .. } => {
+                    let inner_additive = inner.first().is_some_and(|(op, _)| op.is_additive());
+                    if (inner_additive && !(additive && leading)) || (!inner_additive && !additive && !leading) {
+                        format!("({})", expr(e))
+                    } else {
+                        expr(e)
+                    }
+                }
+                _ => expr(e),
+            };
+            let mut out = operand(first, true);
+            for (op, e) in rest {
+                out.push_str(&format!(" {} {}", op.symbol(), operand(e, false)));
+            }
+            out
+        }
     }
 }
 

@@ -200,10 +200,42 @@ pub fn compile_with_params(
     };
     let mut skills: Vec<ir::Skill> = Vec::new();
     for &(file, skill) in &to_check {
-        let mut checker = check::Checker::new(file, &files[file], &mut diags);
-        if let Some(lowered) = checker.skill_with(skill, &for_skill(skill), true) {
-            skills.push(lowered);
+        let settings = for_skill(skill);
+        if settings.is_empty() {
+            let mut checker = check::Checker::new(file, &files[file], &mut diags);
+            if let Some(lowered) = checker.skill_with(skill, &settings, true) {
+                skills.push(lowered);
+            }
+            continue;
         }
+        // An error the defaults do not have is the command line's: say which flags.
+        let mut with_defaults = Vec::new();
+        check::Checker::new(file, &files[file], &mut with_defaults).skill_with(skill, &[], false);
+        let mut found = Vec::new();
+        let lowered = check::Checker::new(file, &files[file], &mut found).skill_with(skill, &settings, true);
+        let flags = settings
+            .iter()
+            .map(|setting| format!("`--param {}`", files[setting.file].text))
+            .collect::<Vec<_>>()
+            .join(", ");
+        for diag in found {
+            let caused = diag.severity() == Severity::Error
+                && diag.file == file
+                && !with_defaults
+                    .iter()
+                    .any(|d| d.code == diag.code && d.span() == diag.span() && d.message == diag.message);
+            if caused {
+                let note = format!("with {flags} from the command line");
+                let help = match &diag.help {
+                    Some(help) => format!("{help} ({note})"),
+                    None => note,
+                };
+                diags.push(diag.help(help));
+            } else {
+                diags.push(diag);
+            }
+        }
+        skills.extend(lowered);
     }
     let mut tasks = Vec::new();
     {

@@ -76,6 +76,13 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
             return diag;
         }
     }
+    // A doc comment before something it cannot document (a `learn` or `limits` block, the end
+    // of a block) reads as a puzzling "expected a doc comment".
+    if label.contains("a doc comment") {
+        if let Some(diag) = misplaced_doc(src_text, span.start, file) {
+            return diag;
+        }
+    }
     // A reserved word where a name was expected reads as a puzzling "expected a name".
     let word: String = src_text
         .get(span.start..)
@@ -95,6 +102,47 @@ fn syntax_error(err: pest::error::Error<Rule>, file: usize, src_text: &str) -> D
         .help(format!("rename it, e.g. `{example}`"));
     }
     Diag::new(Code::Unexpected, file, span, message, label)
+}
+
+/// A doc comment that ends right before `at` (whitespace between) and documents nothing there:
+/// the diagnostic at the comment, naming what follows.
+fn misplaced_doc(src_text: &str, at: usize, file: usize) -> Option<Diag> {
+    let before = src_text.get(..at)?.trim_end();
+    let line_start = before.rfind('\n').map_or(0, |n| n + 1);
+    let last_line = &before[line_start..];
+    let doc_at = line_start + last_line.find("///")?;
+    if last_line[..doc_at - line_start].trim() != "" {
+        return None;
+    }
+    let rest = &src_text[at..];
+    let word: &str = if rest.starts_with('}') {
+        "}"
+    } else {
+        &rest[..rest
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+            .unwrap_or(rest.len())]
+    };
+    let what = match word {
+        "limits" => "a `limits` block",
+        "learn" => "a `learn` block",
+        "}" => "the end of a block",
+        _ => return None,
+    };
+    let help = match word {
+        "limits" => "document each limit inside the block (`/// ...` on the line before `force: 40 N`), or write `//` for a plain comment",
+        "learn" => "document each declaration inside the block (`/// ...` on the line before `motion ...`), or write `//` for a plain comment",
+        _ => "a doc comment documents what follows it: move it before a state, terminal, parameter or declaration, or write `//`",
+    };
+    Some(
+        Diag::new(
+            Code::Unexpected,
+            file,
+            Span::new(doc_at, line_start + last_line.len()),
+            format!("a doc comment cannot document {what}"),
+            "documents nothing",
+        )
+        .help(help),
+    )
 }
 
 /// The word that ends right before `at` (whitespace between), and where it starts.
@@ -944,6 +992,32 @@ fn expr(pair: Pair<'_, Rule>) -> Expr {
         }
         Rule::axis_ref => ExprKind::Axis(axis_ref(pair)),
         Rule::ident => ExprKind::Name(ident(pair)),
+        Rule::negated => {
+            let mut inner = pair.into_inner();
+            let _op = inner.next().expect("grammar: negation has its `-`");
+            ExprKind::Neg(Box::new(expr(inner.next().expect("grammar: negation has an operand"))))
+        }
+        Rule::sum | Rule::product => {
+            let mut inner = pair.into_inner();
+            let first = inner.next().expect("grammar: a chain has a first operand");
+            if inner.peek().is_none() {
+                // A value without an operator at this level (its span is the operand's: the
+                // chain's takes the whitespace after it).
+                return expr(first);
+            }
+            let first = Box::new(expr(first));
+            let mut rest = Vec::new();
+            while let (Some(op), Some(operand)) = (inner.next(), inner.next()) {
+                let op = match op.as_str() {
+                    "+" => BinOp::Add,
+                    "-" => BinOp::Sub,
+                    "*" => BinOp::Mul,
+                    _ => BinOp::Div,
+                };
+                rest.push((op, expr(operand)));
+            }
+            ExprKind::Arith { first, rest }
+        }
         rule => unreachable!("grammar: unexpected {rule:?} as value"),
     };
     Expr { kind, span }
@@ -978,6 +1052,45 @@ mod tests {
         assert_eq!(help, "rename it, e.g. `up_state`");
         let (message, _) = keyword_diag("skill s { terminal from: success }");
         assert_eq!(message, "`from` is a keyword and cannot name a terminal state");
+    }
+
+    #[test]
+    fn a_doc_comment_before_a_block_says_what_it_cannot_document() {
+        let text = "skill s {\n    /// The limits.\n    limits { force: 40 N }\n}\n";
+        let (_, diags) = parse(&SourceFile::new("t.skill", text), 0);
+        let diag = diags.first().expect("a diagnostic");
+        assert_eq!(diag.message, "a doc comment cannot document a `limits` block");
+        assert_eq!(&text[diag.span().start..diag.span().end], "/// The limits.");
+        assert!(diag.help.as_deref().unwrap_or("").contains("document each limit"));
+        let (message, _) = keyword_diag("skill s {\n    /// The plan.\n    learn { }\n}\n");
+        assert_eq!(message, "a doc comment cannot document a `learn` block");
+        let (message, _) = keyword_diag("skill s {\n    terminal d: success\n    /// Dangling.\n}\n");
+        assert_eq!(message, "a doc comment cannot document the end of a block");
+    }
+
+    #[test]
+    fn arithmetic_parses_with_precedence_and_keeps_arrows_and_comments_apart() {
+        let text = "skill s { param a = -1 mm - 2 * -(3 mm + 4 mm) / 2 // c\n state x { on dwell 1 s-> d } }";
+        let (file, diags) = parse(&SourceFile::new("t.skill", text), 0);
+        assert!(diags.is_empty(), "{diags:?}");
+        let value = &file.skills[0].params[0].value;
+        // `-1 mm - ((2 * -(3 mm + 4 mm)) / 2)`: one additive chain of a literal and a product.
+        let ExprKind::Arith { first, rest } = &value.kind else {
+            panic!("{value:?}")
+        };
+        assert!(matches!(&first.kind, ExprKind::Quantity { number, .. } if number.text == "-1"));
+        assert_eq!(rest.len(), 1);
+        assert_eq!(rest[0].0, BinOp::Sub);
+        let ExprKind::Arith { rest: product, .. } = &rest[0].1.kind else {
+            panic!("{:?}", rest[0].1)
+        };
+        assert_eq!(
+            product.iter().map(|(op, _)| *op).collect::<Vec<_>>(),
+            [BinOp::Mul, BinOp::Div]
+        );
+        assert!(matches!(&product[0].1.kind, ExprKind::Neg(inner) if matches!(inner.kind, ExprKind::Arith { .. })));
+        // The value's span ends at its last character, not at the comment after it.
+        assert!(text[value.span.start..value.span.end].ends_with("/ 2"));
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! Deep nesting of every recursive rule (`not`, parentheses, `for` in parentheses, lists,
-//! records, calls): refused past `MAX_NESTING` with a located error before pest recurses, and
+//! records, calls, minus signs, grouped arithmetic): refused past `MAX_NESTING` with a located error before pest recurses, and
 //! parsed, checked, formatted and printed at the bound on a 2 MiB stack (an unoptimised build's
 //! pest takes about 55 KiB for each level of parentheses in a guard).
 
@@ -72,6 +72,12 @@ fn nested_values(levels: usize) -> Vec<(&'static str, String)> {
             "records",
             learn(format!("{}1{}", "{ a: ".repeat(levels), " }".repeat(levels))),
         ),
+        // `- - - 1 mm`: each minus before the last negates (the last is the literal's sign).
+        ("minus signs", learn(format!("{}1 mm", "- ".repeat(levels)))),
+        (
+            "grouped arithmetic",
+            learn(format!("{}1 mm{}", "(".repeat(levels), " * 2)".repeat(levels))),
+        ),
     ]
 }
 
@@ -106,7 +112,7 @@ fn five_thousand_nots_are_refused_at_the_first_not_too_deep() {
         let diag = &compilation.diags[0];
         assert_eq!(
             diag.message,
-            format!("`not`s and brackets nested more than {MAX_NESTING} deep")
+            format!("`not`s, minus signs and brackets nested more than {MAX_NESTING} deep")
         );
         let first = compilation.files[0].text.find("not ").expect("a not");
         let at = first + 4 * (MAX_NESTING - GUARD_DEPTH);
@@ -169,4 +175,26 @@ fn a_parameter_setting_is_bounded_like_a_file() {
         refused.map(|_| ()),
         Err(format!("brackets nested more than {MAX_NESTING} deep"))
     );
+}
+
+#[test]
+fn a_long_sum_costs_no_depth() {
+    // 100 000 terms in one chain: flat in the tree, so parsing, checking, formatting, printing
+    // and dropping it stay within a small stack, and the sum is the value checked.
+    let terms = 100_000;
+    let sum = vec!["1 ms"; terms].join(" + ");
+    let text = format!(
+        "skill s {{\n    param t = {sum}\n    learn {{\n        segments = max_force\n        motion p = dmp(segment 1)\n    }}\n\n    state a {{\n        move p\n        on dwell t -> d\n    }}\n\n    terminal d: success\n}}\n"
+    );
+    assert!(text.len() < skill_compiler::MAX_SOURCE_BYTES);
+    let (compilation, took) = on_stack(2 << 20, move || every_walk(text));
+    assert!(compilation.program.is_some(), "{:?}", compilation.diags);
+    let program = compilation.program.as_ref().expect("compiled");
+    let param = &program.skills[0].params[0];
+    assert!(
+        (param.value_si - terms as f64 * 1e-3).abs() < 1e-9,
+        "{}",
+        param.value_si
+    );
+    assert!(took < Duration::from_secs(30), "took {took:?}");
 }

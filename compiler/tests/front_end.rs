@@ -401,6 +401,51 @@ task k {
 }
 
 #[test]
+fn formatting_prints_arithmetic_with_the_parentheses_its_meaning_needs() {
+    let text = "skill s { param a = (1 cm+2 mm)*3\n param b = 10 mm-(2 mm-1 mm)\n param n = 12/(2*3)\nlearn { motion p = dmp(segment 1) }\nlimits { force: -(-40 N) speed: ((2 * 50 mm/s)) }\nstate x { move p approach within a at 10 mm/s+(5 mm/s) on moved>=b+a/n -> d on force(tool.z) >= 2 * 1 N -> d on timeout -(-5 s)*n -> d }\n terminal d: success }\n";
+    let expected = r#"skill s {
+    param a = (1 cm + 2 mm) * 3
+    param b = 10 mm - (2 mm - 1 mm)
+    param n = 12 / (2 * 3)
+
+    learn {
+        motion p = dmp(segment 1)
+    }
+
+    limits {
+        force: -(-40 N)
+        speed: 2 * 50 mm/s
+    }
+
+    state x {
+        move p from current
+        approach within a at 10 mm/s + 5 mm/s
+        on moved >= b + a / n -> d
+        on force(tool.z) >= 2 * 1 N -> d
+        on timeout -(-5 s) * n -> d
+    }
+
+    terminal d: success
+}
+"#;
+    let compiled = formats_to(text, expected);
+    let program = compiled.program.expect("compiles");
+    let skill = &program.skills[0];
+    let param = |name: &str| skill.params.iter().find(|p| p.name == name).expect("declared").value_si;
+    assert!((param("a") - 0.036).abs() < 1e-12, "{}", param("a"));
+    assert!((param("b") - 0.009).abs() < 1e-12);
+    assert!((param("n") - 2.0).abs() < 1e-12);
+    let ir: Value = serde_json::to_value(skill).expect("the IR serialises");
+    // The folded values are what runs: 15 mm/s, 9 mm + 36 mm / 2 = 27 mm, 2 N, 10 s.
+    let at = |pointer: &str| ir.pointer(pointer).and_then(Value::as_f64).unwrap_or(f64::NAN);
+    assert!((at("/states/0/kind/approach/speed_mps") - 0.015).abs() < 1e-12, "{ir}");
+    assert!((at("/transitions/0/guard/value_m") - 0.027).abs() < 1e-12, "{ir}");
+    assert!((at("/transitions/1/guard/rhs/value") - 2.0).abs() < 1e-12, "{ir}");
+    assert!((at("/transitions/2/guard/duration_s") - 10.0).abs() < 1e-12, "{ir}");
+    assert!((at("/limits/1/value_si") - 0.1).abs() < 1e-12, "{ir}");
+}
+
+#[test]
 fn formatting_prints_lift_offs_and_held_guards_with_the_fewest_parentheses() {
     let text = "skill s { learn { segments = max_force frame c = force_aligned(at: end(segment 1)) motion p = dmp(segment 1) motion q = dmp(segment 2) threshold t = 2 N }\nstate a { move p on force(c.z)>=t for 20 ms -> b on ( motion_done and force(c.z) < t ) for 50 ms or timeout 5 s -> d }\nstate b { move q lift off 2 cm at 10 mm/s on (not (motion_done for 10 ms)) for 100 ms -> e on timeout 5 s -> d }\nstate e { move q\n lift  off 0 mm on not force(c.z) >= t for 1 s -> d on timeout 5 s -> d }\n terminal d: success }\n";
     let expected = r#"skill s {
@@ -729,5 +774,53 @@ fn a_zero_timeout_warns_only_where_a_motion_or_force_would_be_cut() {
             "move q on force(c.z) >= t -> d on dwell 0 s -> extend along c.z at 1 cm/s, up to 1 cm, then d on timeout 5 s -> d"
         )),
         Vec::<Code>::new()
+    );
+}
+
+/// A skill whose dwell is computed from its parameter: `hold - 3 s`.
+const COMPUTED_DWELL: &str = "skill s {\n    param hold = 5 s\n    param passes = 2\n    learn {\n        segments = max_force\n        motion m = dmp(segment 1)\n    }\n    state a {\n        move m\n        repeat passes\n        on dwell hold - 3 s -> d\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
+
+fn with_params(params: &[&str]) -> skill_compiler::Compilation {
+    let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
+    skill_compiler::compile_with_params(
+        skill_compiler::SourceFile::new("s.skill", COMPUTED_DWELL),
+        &params,
+        &mut |_path| {
+            Err(LoadError {
+                reason: "no imports here".into(),
+            })
+        },
+    )
+}
+
+#[test]
+fn arithmetic_in_a_param_flag_is_folded_and_an_error_it_causes_names_the_flag() {
+    let compiled = with_params(&["hold=2 * 2 s + 500 ms"]);
+    let program = compiled.program.unwrap_or_else(|| panic!("{:?}", compiled.diags));
+    assert!((program.skills[0].params[0].value_si - 4.5).abs() < 1e-12);
+    // 1 s - 3 s is a negative dwell: an error of the flag's, not of the file's defaults.
+    let compiled = with_params(&["hold=1s"]);
+    assert!(compiled.program.is_none());
+    let diag = compiled
+        .diags
+        .iter()
+        .find(|d| d.code == Code::OutOfRange)
+        .expect("negative dwell");
+    assert_eq!(diag.message, "the dwell time is negative");
+    let help = diag.help.as_deref().unwrap_or("");
+    assert!(help.contains("with `--param hold=1s` from the command line"), "{help}");
+    // A count set to a duration names what it is.
+    let compiled = with_params(&["passes=10"]);
+    assert!(compiled.program.is_some(), "{:?}", compiled.diags);
+    let text = COMPUTED_DWELL.replace("param passes = 2", "param passes = 10 s");
+    let compiled = skill_compiler::compile_str("s.skill", &text);
+    let diag = compiled
+        .diags
+        .iter()
+        .find(|d| d.code == Code::BadArgument)
+        .expect("not a count");
+    assert_eq!(
+        diag.message,
+        "the repeat count must be a whole number, not a duration (`10 s`)"
     );
 }

@@ -323,6 +323,11 @@ impl Index {
             ExprKind::Record(args) | ExprKind::Call { args, .. } => {
                 args.iter().for_each(|a| self.plain_expr(file, &a.value))
             }
+            ExprKind::Neg(inner) => self.plain_expr(file, inner),
+            ExprKind::Arith { first, rest } => {
+                self.plain_expr(file, first);
+                rest.iter().for_each(|(_, e)| self.plain_expr(file, e));
+            }
             _ => {}
         }
     }
@@ -505,6 +510,11 @@ impl SkillWalk<'_> {
             ExprKind::List(items) => items.iter().for_each(|e| self.value(e)),
             ExprKind::Record(args) => args.iter().for_each(|a| self.value(&a.value)),
             ExprKind::Call { args, .. } => args.iter().for_each(|a| self.value(&a.value)),
+            ExprKind::Neg(inner) => self.value(inner),
+            ExprKind::Arith { first, rest } => {
+                self.value(first);
+                rest.iter().for_each(|(_, e)| self.value(e));
+            }
             ExprKind::Number(_) | ExprKind::Str(_) | ExprKind::Segment(_) => {}
         }
     }

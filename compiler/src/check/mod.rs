@@ -7,9 +7,11 @@
 //! call arguments), [`scope`] (names), [`learn`], [`segments`], [`frames`] and [`forces`]
 //! (the learn block, whose functions [`signatures`] lists), [`limits`] (the supervisor's
 //! limits of a skill or a task step), [`params`] (skill parameters, substituted into the states
-//! and limits before they are checked), [`states`], [`guards`], [`captures`] (`capture NAME`
+//! and limits before they are checked), [`arith`] (arithmetic on values, folded to literals once
+//! the parameters are in), [`states`], [`guards`], [`captures`] (`capture NAME`
 //! and `move M at NAME`) and [`reach`] (the state machine), and [`task`].
 
+mod arith;
 mod captures;
 mod forces;
 mod frames;

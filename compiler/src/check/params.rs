@@ -2,6 +2,7 @@
 //! sets for them, and their substitution into the skill's states and limits before those are
 //! checked, so that every use is checked (units, ranges, never-fires) with the value it runs with.
 
+use super::arith::{self, ArithError};
 use super::task::STEP_ARGS;
 use super::{join_ticked, suggest, Checker};
 use crate::ast::{self, ExprKind, GuardKind, StateBody, StmtKind, Target};
@@ -86,15 +87,19 @@ impl Checker<'_> {
         settings: &[ParamSetting],
         warn_unused: bool,
     ) -> Option<ir::Skill> {
-        if skill.params.is_empty() && settings.is_empty() {
-            return self.skill(skill);
-        }
         let bound = self.bind_params(skill, settings)?;
         let values: HashMap<&str, &ast::Expr> = bound.iter().map(|b| (b.decl.name.name.as_str(), &b.value)).collect();
         let mut body = skill.clone();
         let mut used: HashMap<String, bool> = values.keys().map(|name| (name.to_string(), false)).collect();
         self.params_in_learn(&body, &values);
-        substitute_body(&mut body, &values, &mut used);
+        let mut unfolded = Vec::new();
+        substitute_body(&mut body, &values, &mut used, &mut unfolded);
+        if !unfolded.is_empty() {
+            for error in unfolded {
+                self.report(error.into_diag(self.file));
+            }
+            return None;
+        }
         if warn_unused {
             for b in &bound {
                 if !used.get(&b.decl.name.name).copied().unwrap_or(true) {
@@ -191,7 +196,11 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             }
-            let Some(shape) = Shape::of(&decl.value) else {
+            let mut value = decl.value.clone();
+            if !self.fold_reporting(&mut value) {
+                continue;
+            }
+            let Some(shape) = Shape::of(&value) else {
                 let mut diag = self.diag(
                     Code::BadArgument,
                     decl.value.span,
@@ -212,7 +221,7 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             };
-            if !finite_literal(&decl.value) {
+            if !finite_literal(&value) {
                 let diag = self.diag(
                     Code::OutOfRange,
                     decl.value.span,
@@ -225,7 +234,7 @@ impl Checker<'_> {
             bound.push(Bound {
                 decl,
                 shape,
-                value: decl.value.clone(),
+                value,
                 source: ir::ParamSource::Default,
             });
         }
@@ -250,10 +259,14 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             };
-            let found = Shape::of(&setting.value);
-            if found != Some(slot.shape) || !finite_literal(&setting.value) {
+            let mut value = setting.value.clone();
+            if !self.fold_in(&mut value, setting.file) {
+                continue;
+            }
+            let found = Shape::of(&value);
+            if found != Some(slot.shape) || !finite_literal(&value) {
                 let what = match found {
-                    Some(shape) if finite_literal(&setting.value) => shape.describe(),
+                    Some(shape) if finite_literal(&value) => shape.describe(),
                     Some(_) => "not finite".to_string(),
                     None => "not a number or a quantity".to_string(),
                 };
@@ -278,7 +291,7 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             }
-            slot.value = setting.value.clone();
+            slot.value = value;
             slot.source = setting.source.clone();
         }
         (self.error_count() == errors_before).then_some(bound)
@@ -330,14 +343,30 @@ fn visit_names(expr: &ast::Expr, f: &mut dyn FnMut(&ast::Ident)) {
         ExprKind::Name(name) => f(name),
         ExprKind::List(items) => items.iter().for_each(|item| visit_names(item, f)),
         ExprKind::Record(args) | ExprKind::Call { args, .. } => args.iter().for_each(|arg| visit_names(&arg.value, f)),
+        ExprKind::Neg(inner) => visit_names(inner, f),
+        ExprKind::Arith { first, rest } => {
+            visit_names(first, f);
+            rest.iter().for_each(|(_, operand)| visit_names(operand, f));
+        }
         _ => {}
     }
 }
 
 /// Replaces every parameter's name in the skill's body by its value, spanned where the
-/// name is written (so that a message about the value points at its use).
-fn substitute_body(skill: &mut ast::Skill, values: &HashMap<&str, &ast::Expr>, used: &mut HashMap<String, bool>) {
-    let mut put = |expr: &mut ast::Expr| substitute(expr, values, used);
+/// name is written (so that a message about the value points at its use), then folds the
+/// arithmetic; what does not fold lands in `unfolded`.
+fn substitute_body(
+    skill: &mut ast::Skill,
+    values: &HashMap<&str, &ast::Expr>,
+    used: &mut HashMap<String, bool>,
+    unfolded: &mut Vec<ArithError>,
+) {
+    let mut put = |expr: &mut ast::Expr| {
+        substitute(expr, values, used);
+        if let Err(error) = arith::fold(expr) {
+            unfolded.push(error);
+        }
+    };
     // A use in `learn` is an error (reported before); substituting it keeps the learn block's
     // own check from reporting the name again.
     for decl in &mut skill.learn {
@@ -410,6 +439,12 @@ fn substitute(expr: &mut ast::Expr, values: &HashMap<&str, &ast::Expr>, used: &m
         ExprKind::List(items) => items.iter_mut().for_each(|item| substitute(item, values, used)),
         ExprKind::Record(args) | ExprKind::Call { args, .. } => {
             args.iter_mut().for_each(|arg| substitute(&mut arg.value, values, used))
+        }
+        ExprKind::Neg(inner) => substitute(inner, values, used),
+        ExprKind::Arith { first, rest } => {
+            substitute(first, values, used);
+            rest.iter_mut()
+                .for_each(|(_, operand)| substitute(operand, values, used));
         }
         _ => {}
     }

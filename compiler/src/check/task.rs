@@ -152,6 +152,9 @@ impl Checker<'_> {
                     _ => step_args.push(arg.clone()),
                 }
             }
+            // Arithmetic in a step's own arguments (`force_scale: 2 / 3`); one that does not
+            // fold is reported and dropped, so that it is not reported again as ill-typed.
+            step_args.retain_mut(|arg| self.fold_reporting(&mut arg.value));
             let settings: Vec<ParamSetting> = step
                 .args
                 .iter()

@@ -144,12 +144,26 @@ impl Checker<'_> {
                 }
             }
             _ => {
-                let diag = self.diag(
-                    Code::BadArgument,
-                    expr.span,
-                    format!("{what} must be a whole number"),
-                    "not a count",
-                );
+                // A quantity (often a parameter's value put in its place) is named by its
+                // dimension: "must be a whole number" alone reads as if `10 s` were a fraction.
+                let (message, label) = match &expr.kind {
+                    ExprKind::Quantity { number, unit } => match units::lookup(&unit.name) {
+                        Some((dim, _)) => (
+                            format!(
+                                "{what} must be a whole number, not {} (`{} {}`)",
+                                dim.describe(),
+                                number.text,
+                                unit.name
+                            ),
+                            "not a count",
+                        ),
+                        None => (format!("{what} must be a whole number"), "not a count"),
+                    },
+                    _ => (format!("{what} must be a whole number"), "not a count"),
+                };
+                let diag = self
+                    .diag(Code::BadArgument, expr.span, message, label)
+                    .help("a count is a plain number without a unit: `3`");
                 self.report(diag);
                 None
             }

@@ -2,11 +2,12 @@
 //! characters the grammar cannot take, named by code point and by what they look like.
 //!
 //! pest parses by recursive descent, so every rule that contains itself costs stack per level:
-//! brackets (`(`, `[`, `{`: guards in parentheses, lists, records, calls, blocks) and `not`
-//! (`not not G`). Both are counted here in one measure, the depth, so that pest never recurses
-//! more than [`crate::MAX_NESTING`] levels of them, and neither does anything after it (the AST
-//! lowering, the checker, the formatter, a `Debug` dump of the tree): each opening bracket adds
-//! one level, each `not` one more until the operand it negates ends.
+//! brackets (`(`, `[`, `{`: guards in parentheses, lists, records, calls, blocks, grouped
+//! arithmetic), `not` (`not not G`) and minus (`- -x`). All are counted here in one measure, the
+//! depth, so that pest never recurses more than [`crate::MAX_NESTING`] levels of them, and
+//! neither does anything after it (the AST lowering, the checker, the formatter, a `Debug` dump
+//! of the tree): each opening bracket adds one level, each `not` or `-` one more until the
+//! operand it applies to ends. (A chain `a + b + c` is flat in the tree: it costs no depth.)
 //!
 //! Outside strings and comments the grammar is ASCII: names, keywords, numbers, units and
 //! whitespace. Any other character there is a syntax error at that character, so it is named
@@ -79,6 +80,14 @@ pub(super) fn prescan(text: &str, file: usize) -> Vec<Diag> {
                 at = end;
                 continue;
             }
+            b'-' if bytes.get(at + 1) != Some(&b'>') => {
+                // A minus may negate (`- -x`, `-(a + b)`): pest recurses once per `-` in a
+                // row, as per `not`. A binary minus (`a - b`) ends with the operand after it.
+                scan.nots += 1;
+                if scan.depth + scan.nots > crate::MAX_NESTING {
+                    return vec![scan.too_deep(Span::new(at, at + 1), true)];
+                }
+            }
             b' ' | b'\t' | b'\r' | b'\n' => {}
             b if b.is_ascii_graphic() => scan.nots = 0,
             _ => {
@@ -116,10 +125,10 @@ impl Scan {
                 Code::TooDeep,
                 self.file,
                 span,
-                format!("`not`s and brackets nested more than {limit} deep"),
+                format!("`not`s, minus signs and brackets nested more than {limit} deep"),
                 "nesting exceeds the limit here",
             )
-            .help("`not not G` is `G`: drop the `not`s in pairs, and the brackets no guard needs")
+            .help("`not not G` is `G` and `- -x` is `x`: drop them in pairs, and the brackets nothing needs")
         } else {
             Diag::new(
                 Code::TooDeep,

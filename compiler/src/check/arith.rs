@@ -1,0 +1,459 @@
+//! Arithmetic on quantities (`-inset`, `depth + 2 mm`, `2 * hold`, `(a + b) / 2`), folded to
+//! one literal once the skill's parameters are substituted, so that every later check (units,
+//! ranges, never-fires) sees the value the skill runs with.
+//!
+//! The rules are those of physical quantities: `+` and `-` join values of one dimension (a
+//! length and a length; a number and a number), `*` and `/` scale a value by a plain number,
+//! and `-` negates. A product or a quotient of two quantities has no dimension skillc knows
+//! (`mm * mm`), so it is refused rather than guessed. The result keeps the unit of the value it
+//! started from (`depth + 2 mm` with `depth = 15 mm` is `17 mm`), so messages about it read in
+//! the author's units.
+
+use super::Checker;
+use crate::ast::{self, BinOp, ExprKind};
+use crate::diag::{Code, Diag};
+use crate::source::Span;
+use crate::units::{self, Dim};
+
+/// A value met while folding.
+#[derive(Debug, Clone)]
+enum Value {
+    Number(f64),
+    /// `si` in SI units; `unit` names the unit to write the result in.
+    Quantity {
+        si: f64,
+        dim: Dim,
+        unit: &'static str,
+    },
+}
+
+impl Value {
+    fn describe(&self) -> &'static str {
+        match self {
+            Value::Number(_) => "a plain number",
+            Value::Quantity { dim, .. } => dim.describe(),
+        }
+    }
+}
+
+/// Why an expression does not fold.
+#[derive(Debug)]
+pub(crate) struct ArithError {
+    code: Code,
+    span: Span,
+    message: String,
+    label: &'static str,
+    help: String,
+}
+
+impl ArithError {
+    fn new(code: Code, span: Span, message: String, label: &'static str, help: impl Into<String>) -> Self {
+        ArithError {
+            code,
+            span,
+            message,
+            label,
+            help: help.into(),
+        }
+    }
+
+    /// The diagnostic, for file `file`.
+    pub(crate) fn into_diag(self, file: usize) -> Diag {
+        Diag::new(self.code, file, self.span, self.message, self.label).help(self.help)
+    }
+}
+
+/// Replaces every arithmetic expression inside `expr` by the literal it computes. The folded
+/// literal is spanned over the whole expression it replaces.
+pub(crate) fn fold(expr: &mut ast::Expr) -> Result<(), ArithError> {
+    match &mut expr.kind {
+        ExprKind::Neg(_) | ExprKind::Arith { .. } => {
+            let value = evaluate(expr)?;
+            expr.kind = literal(&value, expr.span);
+            Ok(())
+        }
+        ExprKind::List(items) => items.iter_mut().try_for_each(fold),
+        ExprKind::Record(args) | ExprKind::Call { args, .. } => {
+            args.iter_mut().try_for_each(|arg| fold(&mut arg.value))
+        }
+        _ => Ok(()),
+    }
+}
+
+impl Checker<'_> {
+    /// [`fold`], reporting a failure in this checker's file; whether it folded.
+    pub(super) fn fold_reporting(&mut self, expr: &mut ast::Expr) -> bool {
+        self.fold_in(expr, self.file)
+    }
+
+    /// [`fold`], reporting a failure in file `file` (a setting written in another file).
+    pub(super) fn fold_in(&mut self, expr: &mut ast::Expr, file: usize) -> bool {
+        match fold(expr) {
+            Ok(()) => true,
+            Err(error) => {
+                self.report(error.into_diag(file));
+                false
+            }
+        }
+    }
+}
+
+fn evaluate(expr: &ast::Expr) -> Result<Value, ArithError> {
+    let value = match &expr.kind {
+        ExprKind::Number(number) => Value::Number(number.value),
+        ExprKind::Quantity { number, unit } => {
+            let Some(&(name, dim, factor)) = units::UNITS.iter().find(|(name, _, _)| *name == unit.name) else {
+                return Err(ArithError::new(
+                    Code::UnknownUnit,
+                    unit.span,
+                    format!("unknown unit `{}`", unit.name),
+                    "unknown unit",
+                    format!(
+                        "units skillc knows: {}",
+                        units::UNITS.iter().map(|(n, _, _)| *n).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            };
+            Value::Quantity {
+                si: number.value * factor,
+                dim,
+                unit: name,
+            }
+        }
+        ExprKind::Neg(inner) => match evaluate(inner)? {
+            Value::Number(v) => Value::Number(-v),
+            Value::Quantity { si, dim, unit } => Value::Quantity { si: -si, dim, unit },
+        },
+        ExprKind::Arith { first, rest } => {
+            let mut value = evaluate(first)?;
+            for (op, operand) in rest {
+                value = combine(*op, value, evaluate(operand)?, expr.span.start, operand.span)?;
+            }
+            value
+        }
+        ExprKind::Name(name) => {
+            return Err(ArithError::new(
+                Code::BadArithmetic,
+                name.span,
+                format!("`{}` is not a parameter of this skill", name.name),
+                "not a number",
+                "arithmetic takes numbers, quantities and the skill's parameters \
+                 (a parameter's default: numbers and quantities only)",
+            ))
+        }
+        other => {
+            return Err(ArithError::new(
+                Code::BadArithmetic,
+                expr.span,
+                format!("arithmetic on {}", kind_name(other)),
+                "not a number",
+                "arithmetic takes numbers, quantities and the skill's parameters",
+            ))
+        }
+    };
+    let finite = match value {
+        Value::Number(v) | Value::Quantity { si: v, .. } => v.is_finite(),
+    };
+    if !finite {
+        return Err(ArithError::new(
+            Code::OutOfRange,
+            expr.span,
+            "the value is not finite".to_string(),
+            "too large",
+            "use values of a physical size",
+        ));
+    }
+    Ok(value)
+}
+
+/// `lhs op rhs`, where the expression so far starts at byte `start` and `rhs` is at `rhs_span`.
+fn combine(op: BinOp, lhs: Value, rhs: Value, start: usize, rhs_span: Span) -> Result<Value, ArithError> {
+    use Value::{Number, Quantity};
+    let whole = Span::new(start, rhs_span.end);
+    let mismatch = |lhs: &Value, rhs: &Value, verb: &str| {
+        ArithError::new(
+            Code::UnitMismatch,
+            whole,
+            format!("{verb} {} and {}", lhs.describe(), rhs.describe()),
+            "different dimensions",
+            match (lhs, rhs) {
+                (Number(_), Quantity { unit, .. }) | (Quantity { unit, .. }, Number(_)) => {
+                    format!("give both sides a unit, e.g. `{unit}`")
+                }
+                _ => "add or subtract values of one dimension".to_string(),
+            },
+        )
+    };
+    let value = match op {
+        BinOp::Add | BinOp::Sub => {
+            let sign = if op == BinOp::Add { 1.0 } else { -1.0 };
+            let verb = if op == BinOp::Add { "adds" } else { "subtracts" };
+            match (&lhs, &rhs) {
+                (Number(a), Number(b)) => Number(a + sign * b),
+                (Quantity { si: a, dim, unit }, Quantity { si: b, dim: other, .. }) if dim == other => Quantity {
+                    si: a + sign * b,
+                    dim: *dim,
+                    unit,
+                },
+                _ => return Err(mismatch(&lhs, &rhs, verb)),
+            }
+        }
+        BinOp::Mul => match (&lhs, &rhs) {
+            (Number(a), Number(b)) => Number(a * b),
+            (Number(k), Quantity { si, dim, unit }) | (Quantity { si, dim, unit }, Number(k)) => Quantity {
+                si: si * k,
+                dim: *dim,
+                unit,
+            },
+            _ => {
+                return Err(ArithError::new(
+                    Code::BadArithmetic,
+                    whole,
+                    format!("multiplies {} by {}", lhs.describe(), rhs.describe()),
+                    "no such dimension",
+                    "scale a quantity by a plain number: `2 * hold`",
+                ))
+            }
+        },
+        BinOp::Div => {
+            let divisor = match &rhs {
+                Number(b) => *b,
+                Quantity { .. } => {
+                    return Err(ArithError::new(
+                        Code::BadArithmetic,
+                        whole,
+                        format!("divides {} by {}", lhs.describe(), rhs.describe()),
+                        "no such dimension",
+                        "divide by a plain number: `depth / 2`",
+                    ))
+                }
+            };
+            if divisor == 0.0 {
+                return Err(ArithError::new(
+                    Code::BadArithmetic,
+                    rhs_span,
+                    "division by zero".to_string(),
+                    "zero",
+                    "divide by a number other than 0",
+                ));
+            }
+            match lhs {
+                Number(a) => Number(a / divisor),
+                Quantity { si, dim, unit } => Quantity {
+                    si: si / divisor,
+                    dim,
+                    unit,
+                },
+            }
+        }
+    };
+    Ok(value)
+}
+
+/// The literal of a folded value, in the unit the value carries.
+fn literal(value: &Value, span: Span) -> ExprKind {
+    match *value {
+        Value::Number(v) => ExprKind::Number(ast::Number {
+            text: number_text(v),
+            value: v,
+        }),
+        Value::Quantity { si, unit, .. } => {
+            let factor = units::lookup(unit).map_or(1.0, |(_, factor)| factor);
+            let v = si / factor;
+            ExprKind::Quantity {
+                number: ast::Number {
+                    text: number_text(v),
+                    value: v,
+                },
+                unit: ast::Ident {
+                    name: unit.to_string(),
+                    span,
+                },
+            }
+        }
+    }
+}
+
+/// A number as a literal would write it: whole numbers without a point (`4`, which counts
+/// accept), others to 9 decimals with trailing zeros dropped (`17` for 17.000000000000004).
+fn number_text(v: f64) -> String {
+    let rounded = (v * 1e9).round() / 1e9;
+    if rounded == rounded.trunc() && rounded.abs() < 1e15 {
+        return format!("{}", rounded as i64);
+    }
+    if v.abs() < 1e-6 || v.abs() >= 1e15 {
+        return format!("{v:e}");
+    }
+    let text = format!("{v:.9}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+fn kind_name(kind: &ExprKind) -> &'static str {
+    match kind {
+        ExprKind::Str(_) => "a string",
+        ExprKind::List(_) => "a list",
+        ExprKind::Record(_) => "a record",
+        ExprKind::Segment(_) => "a segment",
+        ExprKind::Call { .. } => "a function call",
+        ExprKind::Axis(_) => "a frame's axis",
+        _ => "this value",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ast::Expr;
+
+    fn span() -> Span {
+        Span { start: 0, end: 1 }
+    }
+
+    fn q(v: f64, unit: &str) -> Expr {
+        Expr {
+            kind: ExprKind::Quantity {
+                number: ast::Number {
+                    text: v.to_string(),
+                    value: v,
+                },
+                unit: ast::Ident {
+                    name: unit.to_string(),
+                    span: span(),
+                },
+            },
+            span: span(),
+        }
+    }
+
+    fn n(v: f64) -> Expr {
+        Expr {
+            kind: ExprKind::Number(ast::Number {
+                text: v.to_string(),
+                value: v,
+            }),
+            span: span(),
+        }
+    }
+
+    fn bin(op: BinOp, lhs: Expr, rhs: Expr) -> Expr {
+        Expr {
+            kind: ExprKind::Arith {
+                first: Box::new(lhs),
+                rest: vec![(op, rhs)],
+            },
+            span: span(),
+        }
+    }
+
+    fn folded(mut expr: Expr) -> Result<(f64, String, String), Code> {
+        fold(&mut expr).map_err(|e| e.code)?;
+        match expr.kind {
+            ExprKind::Number(number) => Ok((number.value, number.text, String::new())),
+            ExprKind::Quantity { number, unit } => Ok((number.value, number.text, unit.name)),
+            other => panic!("not a literal: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn sums_keep_the_left_unit_and_convert_the_right() {
+        let (v, text, unit) = folded(bin(BinOp::Add, q(15.0, "mm"), q(2.0, "cm"))).unwrap();
+        assert!((v - 35.0).abs() < 1e-9, "{v}");
+        assert_eq!((text.as_str(), unit.as_str()), ("35", "mm"));
+        let (v, _, unit) = folded(bin(BinOp::Sub, q(1.0, "s"), q(250.0, "ms"))).unwrap();
+        assert!((v - 0.75).abs() < 1e-12);
+        assert_eq!(unit, "s");
+    }
+
+    #[test]
+    fn scaling_negation_and_counts() {
+        let (v, _, unit) = folded(bin(BinOp::Mul, n(2.0), q(1.5, "s"))).unwrap();
+        assert_eq!((v, unit.as_str()), (3.0, "s"));
+        let (v, _, _) = folded(bin(BinOp::Div, q(10.0, "N"), n(4.0))).unwrap();
+        assert_eq!(v, 2.5);
+        let neg = Expr {
+            kind: ExprKind::Neg(Box::new(q(15.0, "mm"))),
+            span: span(),
+        };
+        assert_eq!(folded(neg).unwrap().0, -15.0);
+        // A count stays whole-looking, so `repeat 2 * 3` is a count.
+        let (_, text, unit) = folded(bin(BinOp::Mul, n(2.0), n(3.0))).unwrap();
+        assert_eq!((text.as_str(), unit.as_str()), ("6", ""));
+        // 0.1 + 0.2 reads as written, not as 0.30000000000000004.
+        assert_eq!(folded(bin(BinOp::Add, n(0.1), n(0.2))).unwrap().1, "0.3");
+    }
+
+    #[test]
+    fn refuses_what_has_no_dimension_or_no_value() {
+        assert_eq!(
+            folded(bin(BinOp::Add, q(1.0, "mm"), q(1.0, "N"))).unwrap_err(),
+            Code::UnitMismatch
+        );
+        assert_eq!(
+            folded(bin(BinOp::Add, q(1.0, "mm"), n(1.0))).unwrap_err(),
+            Code::UnitMismatch
+        );
+        assert_eq!(
+            folded(bin(BinOp::Mul, q(1.0, "mm"), q(1.0, "mm"))).unwrap_err(),
+            Code::BadArithmetic
+        );
+        assert_eq!(
+            folded(bin(BinOp::Div, q(1.0, "mm"), q(1.0, "mm"))).unwrap_err(),
+            Code::BadArithmetic
+        );
+        assert_eq!(
+            folded(bin(BinOp::Div, q(1.0, "mm"), n(0.0))).unwrap_err(),
+            Code::BadArithmetic
+        );
+        assert_eq!(
+            folded(bin(BinOp::Mul, q(1e308, "m"), n(10.0))).unwrap_err(),
+            Code::OutOfRange
+        );
+        let name = Expr {
+            kind: ExprKind::Name(ast::Ident {
+                name: "depth".into(),
+                span: span(),
+            }),
+            span: span(),
+        };
+        assert_eq!(
+            folded(bin(BinOp::Add, name, q(1.0, "mm"))).unwrap_err(),
+            Code::BadArithmetic
+        );
+    }
+
+    #[test]
+    fn a_chain_folds_left_to_right() {
+        // 1 s - 250 ms - 250 ms = 0.5 s (not 1 s - (250 ms - 250 ms)).
+        let chain = Expr {
+            kind: ExprKind::Arith {
+                first: Box::new(q(1.0, "s")),
+                rest: vec![(BinOp::Sub, q(250.0, "ms")), (BinOp::Sub, q(250.0, "ms"))],
+            },
+            span: span(),
+        };
+        assert!((folded(chain).unwrap().0 - 0.5).abs() < 1e-12);
+        // 12 / 2 / 3 = 2.
+        let chain = Expr {
+            kind: ExprKind::Arith {
+                first: Box::new(n(12.0)),
+                rest: vec![(BinOp::Div, n(2.0)), (BinOp::Div, n(3.0))],
+            },
+            span: span(),
+        };
+        assert_eq!(folded(chain).unwrap().0, 2.0);
+    }
+
+    #[test]
+    fn folds_inside_lists_and_calls() {
+        let mut list = Expr {
+            kind: ExprKind::List(vec![q(0.0, "mm"), bin(BinOp::Mul, n(-1.0), q(5.0, "mm"))]),
+            span: span(),
+        };
+        fold(&mut list).unwrap();
+        let ExprKind::List(items) = &list.kind else {
+            unreachable!()
+        };
+        assert!(matches!(&items[0].kind, ExprKind::Quantity { number, .. } if number.value == 0.0));
+        assert!(matches!(&items[1].kind, ExprKind::Quantity { number, .. } if number.value == -5.0));
+    }
+}

@@ -837,3 +837,28 @@ fn completion_of_entry_actions_control_modes_and_outcomes() {
         assert_eq!(labels(&engine, position), expected, "{typed:?}");
     }
 }
+
+#[test]
+fn a_parameter_inside_arithmetic_is_found_hovered_and_renamed() {
+    let text = include_str!("../compiler/tests/corpus/ok/arithmetic.skill");
+    let name = "/mem/arithmetic.skill";
+    let mut engine = Engine::in_memory();
+    engine.open(name, text);
+    let here = |needle: &str, skip: usize| at(text, needle, 0, skip, Encoding::Utf16);
+    // `inset` in `within inset + 2 cm` and in `-inset - 5 mm` lead to its declaration.
+    let declared = here("param inset", 6);
+    for use_at in [here("within inset", 7), here("-inset - 5 mm", 1)] {
+        let found = engine.definition(name, use_at).expect("a definition");
+        assert_eq!(found.range.start, declared, "{use_at:?}");
+    }
+    let references = engine.references(name, declared, true);
+    assert_eq!(references.len(), 3, "the declaration and two uses: {references:?}");
+    let hover = match engine.hover(name, here("hold / 2", 0)).map(|h| h.contents) {
+        Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
+        other => format!("{other:?}"),
+    };
+    assert!(hover.contains("2 s"), "the default is shown: {hover}");
+    let edit = engine.rename(name, declared, "margin").expect("renames");
+    let edits: usize = edit.changes.iter().flat_map(|c| c.values()).map(Vec::len).sum();
+    assert_eq!(edits, 3);
+}

@@ -264,8 +264,42 @@ impl Diag {
     pub fn with_source<'a>(&'a self, source: &'a SourceFile) -> Rendered<'a> {
         Rendered {
             diag: self,
-            source: miette::NamedSource::new(source.name.clone(), source.text.clone()),
+            source: CharColumns {
+                name: source.name.clone(),
+                text: source.text.clone(),
+            },
         }
+    }
+}
+
+/// A file's text for miette, with columns counted in characters: miette's own count is in
+/// bytes, which put `skillc check`'s `file:line:column` six columns right of the JSON output's
+/// (and the editor's) on a line with `é`, `µ`, `°` and an emoji before the problem.
+#[derive(Debug)]
+struct CharColumns {
+    name: String,
+    text: std::sync::Arc<str>,
+}
+
+impl miette::SourceCode for CharColumns {
+    fn read_span<'a>(
+        &'a self,
+        span: &miette::SourceSpan,
+        context_lines_before: usize,
+        context_lines_after: usize,
+    ) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        let contents = self.text.read_span(span, context_lines_before, context_lines_after)?;
+        let start = contents.span().offset();
+        let line_start = self.text[..start].rfind('\n').map_or(0, |n| n + 1);
+        let column = self.text[line_start..start].chars().count();
+        Ok(Box::new(miette::MietteSpanContents::new_named(
+            self.name.clone(),
+            contents.data(),
+            *contents.span(),
+            contents.line(),
+            column,
+            contents.line_count(),
+        )))
     }
 }
 
@@ -273,7 +307,7 @@ impl Diag {
 #[derive(Debug)]
 pub struct Rendered<'a> {
     diag: &'a Diag,
-    source: miette::NamedSource<std::sync::Arc<str>>,
+    source: CharColumns,
 }
 
 impl fmt::Display for Rendered<'_> {

@@ -824,3 +824,19 @@ fn arithmetic_in_a_param_flag_is_folded_and_an_error_it_causes_names_the_flag() 
         "the repeat count must be a whole number, not a duration (`10 s`)"
     );
 }
+
+#[test]
+fn rendered_columns_count_characters_like_the_json_and_the_editor() {
+    let text = "skill s {\n    learn {\n        motion m = dmp(segment 1)\n    }\n    state a {\n        move m from current\n        on timeout \"é µ ° 🤖\" or dwell 5 mm -> d\n    }\n    terminal d: success\n}\n";
+    let compilation = skill_compiler::compile_str("col.skill", text);
+    let diag = compilation
+        .diags
+        .iter()
+        .find(|d| d.code == Code::UnitMismatch)
+        .expect("`dwell 5 mm` is refused");
+    let (line, column) = compilation.files[0].line_col(diag.span().start);
+    // Eight spaces, `on timeout "é µ ° 🤖" or dwell ` is 38 characters (44 bytes).
+    assert_eq!((line, column), (7, 39));
+    let rendered = skill_compiler::render::human(diag, &compilation, false, 100);
+    assert!(rendered.contains("col.skill:7:39]"), "{rendered}");
+}

@@ -192,3 +192,61 @@ fn a_motion_at_a_pose_not_yet_captured_fails_naming_the_capture() {
     );
     assert_eq!(report.visits.last().map(|visit| visit.state.as_str()), Some("again"));
 }
+
+/// `touch_capture.skill` with its `again` ending at `found` moved by `offset`.
+fn with_offset(offset: &str) -> skill_ir::Skill {
+    let text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
+    let text = text.replace(
+        "move approach at found\n",
+        &format!("move approach at found + {offset}\n"),
+    );
+    assert!(text.contains(offset));
+    let compiled = skill_compiler::compile_str("touch_capture.skill", &text);
+    let Some(program) = compiled.program else {
+        panic!("{offset}: {:?}", compiled.diags)
+    };
+    program.skills.into_iter().next().expect("one skill")
+}
+
+#[test]
+fn a_motion_at_a_capture_with_an_offset_ends_where_the_offset_says() {
+    let (skill, learned) = learn();
+    let (report, log) = run(&skill, &learned, &["table.z=0.225"]);
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+    let found = entered(&report, "settle");
+    let end_at = last_in(&log, "again");
+    // 1 cm above the found point, given in the base's axes and in the contact frame's (whose z
+    // is the force the tool applied: down into the table), and 2 cm along the base's x.
+    for (offset, expected) in [
+        ("[0 mm, 0 mm, 1 cm]", [0.0, 0.0, 0.01]),
+        ("[0 mm, 0 mm, -1 cm] in contact", [0.0, 0.0, 0.01]),
+        ("[2 * 10 mm, 0 mm, 5 mm] in base", [0.02, 0.0, 0.005]),
+    ] {
+        let moved = with_offset(offset);
+        let (report, log) = run(&moved, &learned, &["table.z=0.225"]);
+        assert_eq!(
+            report.outcome,
+            skill_ir::Outcome::Success,
+            "{offset}: {}",
+            report.message
+        );
+        let found_here = entered(&report, "settle");
+        let end = last_in(&log, "again");
+        // Against the same motion without the offset: what the offset adds, within 1 mm.
+        let added: [f64; 3] = std::array::from_fn(|i| end[i] - end_at[i] - (found_here[i] - found[i]));
+        let error = distance(added, expected);
+        eprintln!(
+            "`at found + {offset}`: moved {:.2?} mm from the plain `at`, {:.2} mm from the offset",
+            added.map(|v| v * 1e3),
+            error * 1e3
+        );
+        assert!(error < 0.001, "{offset}: {added:?}");
+        // And where it says in the world: the found point plus the offset, within the 5 mm the
+        // plain `at` reaches its goal by.
+        let target: [f64; 3] = std::array::from_fn(|i| found_here[i] + expected[i]);
+        assert!(
+            distance(end, target) < 0.005,
+            "{offset}: ended {end:?}, target {target:?}"
+        );
+    }
+}

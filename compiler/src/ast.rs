@@ -185,6 +185,8 @@ pub enum StmtKind {
         relative: bool,
         /// `at NAME`: the goal is moved to the position `capture NAME` stored.
         at: Option<Ident>,
+        /// `at NAME + OFFSET in FRAME`: moved on from there by `OFFSET`.
+        offset: Option<AtOffset>,
     },
     /// `control force z, position x y rx ry rz in FRAME`.
     Control {
@@ -459,6 +461,15 @@ pub struct Arg {
     pub value: Expr,
     /// The whole argument.
     pub span: Span,
+}
+
+/// `+ [0 mm, 0 mm, 5 mm] in contact` after `move M at NAME`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AtOffset {
+    /// The offset: three lengths.
+    pub value: Expr,
+    /// The frame whose axes it is given in; the base's when `None`.
+    pub frame: Option<Ident>,
 }
 
 /// A value.

@@ -299,11 +299,22 @@ fn statement(stmt: &StmtKind) -> String {
             motion,
             relative,
             at: Some(at),
+            offset,
             ..
-        } => match relative {
-            true => format!("move {} relative at {}", motion.name, at.name),
-            false => format!("move {} at {}", motion.name, at.name),
-        },
+        } => {
+            let offset = match offset {
+                Some(AtOffset {
+                    value,
+                    frame: Some(frame),
+                }) => format!(" + {} in {}", expr(value), frame.name),
+                Some(AtOffset { value, frame: None }) => format!(" + {}", expr(value)),
+                None => String::new(),
+            };
+            match relative {
+                true => format!("move {} relative at {}{offset}", motion.name, at.name),
+                false => format!("move {} at {}{offset}", motion.name, at.name),
+            }
+        }
         StmtKind::Move {
             motion, relative: true, ..
         } => format!("move {} relative", motion.name),

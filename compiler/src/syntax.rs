@@ -584,10 +584,19 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
             let motion = ident(inner.next().expect("grammar: move names a motion"));
             let mut start = None;
             let mut at = None;
+            let mut offset = None;
             for part in inner {
                 match part.as_rule() {
                     Rule::move_at => {
-                        at = part.into_inner().next().map(ident);
+                        let mut parts = part.into_inner();
+                        at = parts.next().map(ident);
+                        offset = parts.next().map(|offset_pair| {
+                            let mut inner = offset_pair.into_inner();
+                            AtOffset {
+                                value: expr(inner.next().expect("grammar: an offset has a value")),
+                                frame: inner.next().map(ident),
+                            }
+                        });
                     }
                     rule => start = Some(rule),
                 }
@@ -597,6 +606,7 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
                 from_current: start == Some(Rule::from_current),
                 relative: start == Some(Rule::move_relative),
                 at,
+                offset,
             }
         }
         Rule::control_stmt => {

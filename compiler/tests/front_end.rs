@@ -840,3 +840,33 @@ fn rendered_columns_count_characters_like_the_json_and_the_editor() {
     let rendered = skill_compiler::render::human(diag, &compilation, false, 100);
     assert!(rendered.contains("col.skill:7:39]"), "{rendered}");
 }
+
+#[test]
+fn an_offset_from_a_capture_is_three_lengths_in_a_known_frame() {
+    let skill = |offset: &str| {
+        format!(
+            "skill s {{\n    learn {{\n        motion m = dmp(segment 1)\n    }}\n    state a {{\n        capture found\n        move m from current\n        on motion_done -> b\n    }}\n    state b {{\n        move m at found + {offset}\n        on motion_done -> d\n    }}\n    terminal d: success\n}}\n"
+        )
+    };
+    let compiled = skill_compiler::compile_str("s.skill", &skill("[0 mm, 2 * 1 mm, -3 mm] in tool"));
+    let program = compiled.program.unwrap_or_else(|| panic!("{:?}", compiled.diags));
+    let skill_ir::StateKind::Active(active) = &program.skills[0].states[1].kind else {
+        panic!("`b` is active")
+    };
+    let offset = active.motion_at_offset.as_ref().expect("an offset");
+    assert_eq!(offset.frame, skill_ir::FrameRef::Tool);
+    assert!((offset.offset_m[1] - 0.002).abs() < 1e-12 && (offset.offset_m[2] + 0.003).abs() < 1e-12);
+    for (offset, code) in [
+        ("[1 mm, 2 mm]", Code::BadArgument),
+        ("[1 mm, 2 mm, 3 N]", Code::UnitMismatch),
+        ("[0 mm, 0 mm, 1 mm] in nowhere", Code::UnknownName),
+    ] {
+        let compiled = skill_compiler::compile_str("s.skill", &skill(offset));
+        assert!(compiled.program.is_none(), "{offset}");
+        assert!(
+            compiled.diags.iter().any(|d| d.code == code),
+            "{offset}: {:?}",
+            compiled.diags
+        );
+    }
+}

@@ -35,7 +35,18 @@ use serde::{Deserialize, Serialize};
 /// - 6: an active state may [`ActiveState::capture`] the tool's pose at entry under a name and
 ///   place its motion's goal at a captured pose ([`ActiveState::motion_at`]) (both optional: a
 ///   version 5 file reads as a version 6 file without them).
-pub const IR_VERSION: u32 = 6;
+/// - 7: the goal at a captured pose may be moved on by an offset in a frame's axes
+///   ([`ActiveState::motion_at_offset`]; optional: a version 6 file reads as a version 7 file).
+pub const IR_VERSION: u32 = 7;
+
+/// An offset from a captured pose: [`ActiveState::motion_at_offset`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AtOffset {
+    /// The offset along the frame's x, y and z, metres.
+    pub offset_m: [f64; 3],
+    /// The frame whose axes the offset is given in.
+    pub frame: FrameRef,
+}
 
 /// A compiled `.skill` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -761,6 +772,11 @@ pub struct ActiveState {
     /// with [`ActiveState::motion_relative`]. Left out of the JSON when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion_at: Option<String>,
+    /// `move M at NAME + [x, y, z] in FRAME`: the goal lands at the captured position moved by
+    /// this offset, in metres along `FRAME`'s axes as they are when the state is entered. Only
+    /// with [`ActiveState::motion_at`]. Left out of the JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion_at_offset: Option<AtOffset>,
     /// `capture NAME`: on entering the state, the tool point's pose (base frame) is stored under
     /// NAME for the rest of the run; entering again overwrites it. Left out of the JSON when
     /// `None`.

@@ -521,10 +521,16 @@ impl SkillWalk<'_> {
 
     fn stmt(&mut self, stmt: &StmtKind) {
         match stmt {
-            StmtKind::Move { motion, at, .. } => {
+            StmtKind::Move { motion, at, offset, .. } => {
                 self.refer(motion, &[Kind::Motion]);
                 if let Some(at) = at {
                     self.refer(at, &[Kind::Capture]);
+                }
+                if let Some(offset) = offset {
+                    self.value(&offset.value);
+                    if let Some(frame) = &offset.frame {
+                        self.refer(frame, &[Kind::Frame]);
+                    }
                 }
             }
             StmtKind::Control { frame, .. } => {

@@ -402,6 +402,9 @@ fn substitute_body(
                         put(max);
                     }
                 }
+                StmtKind::Move {
+                    offset: Some(offset), ..
+                } => put(&mut offset.value),
                 StmtKind::Move { .. } | StmtKind::Control { .. } | StmtKind::Apply(_) | StmtKind::Capture(_) => {}
             }
         }

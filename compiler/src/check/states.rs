@@ -172,6 +172,7 @@ impl Checker<'_> {
         let mut motion = None;
         let mut motion_relative = false;
         let mut motion_at = None;
+        let mut motion_at_offset = None;
         let mut capture = None;
         let mut frame = ir::FrameRef::Base;
         let mut position_controlled = [true; 6];
@@ -228,12 +229,23 @@ impl Checker<'_> {
                     motion: name,
                     relative,
                     at,
+                    offset,
                     ..
                 } => {
                     motion = self.resolve(name, SymKind::Motion, scope).map(ir::MotionId);
                     motion_relative = *relative;
                     if let Some(at) = at {
                         motion_at = self.move_at(name, at, *relative, scope);
+                    }
+                    if let Some(offset) = offset {
+                        let value = self.vector3(&offset.value, Dim::Length, "the offset from a captured pose");
+                        let frame = match &offset.frame {
+                            Some(name) => self.frame_ref(name, scope),
+                            None => Some(ir::FrameRef::Base),
+                        };
+                        if let (Some(offset_m), Some(frame)) = (value, frame) {
+                            motion_at_offset = Some(ir::AtOffset { offset_m, frame });
+                        }
                     }
                 }
                 StmtKind::Capture(name) => capture = Some(name.name.clone()),
@@ -385,6 +397,7 @@ impl Checker<'_> {
             motion,
             motion_relative,
             motion_at,
+            motion_at_offset,
             capture,
             frame,
             position_controlled,

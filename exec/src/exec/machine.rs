@@ -594,9 +594,13 @@ impl<'b, 'a> Machine<'b, 'a> {
             // motion's demonstrated start. A task step's `goal_offset` is not added again: the
             // entry pose carries it already (the state began where the offset goals led). Other
             // motions move by the step's offset and by what earlier extensions found.
-            // `move M at NAME`: the goal moves to where the tool point was captured.
+            // `move M at NAME`: the goal moves to where the tool point was captured, and on by
+            // `+ OFFSET in FRAME` along that frame's axes as they are at this entry.
             let offset = if let Some(name) = &active.motion_at {
-                self.capture_offset(name, motion_id, rig.flange_to_tool())?
+                let shift = active.motion_at_offset.as_ref().map_or_else(Vector3::zeros, |at| {
+                    self.frame_pose(at.frame, rig, t).rotation * Vector3::from(at.offset_m)
+                });
+                self.capture_offset(name, motion_id, rig.flange_to_tool(), shift)?
             } else if active.motion_relative {
                 flange.translation.vector - motion_start(learned).translation.vector
             } else {
@@ -655,6 +659,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         name: &str,
         motion_id: ir::MotionId,
         flange_to_tool: &Isometry3<f64>,
+        shift: Vector3<f64>,
     ) -> Result<Vector3<f64>, ExecError> {
         let motion_name = &self.skill().learn.motions[motion_id.index()].name;
         let Some(pose) = self.captures.get(name) else {
@@ -682,7 +687,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         };
         offset_to_place(
             self.bound.motions[motion_id.index()],
-            pose.translation.vector.into(),
+            (pose.translation.vector + shift).into(),
             flange_to_tool,
         )
         .map(Vector3::from)

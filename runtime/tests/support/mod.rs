@@ -92,6 +92,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
                 motion: motion.map(ir::MotionId),
                 motion_relative: false,
                 motion_at: None,
+                motion_at_offset: None,
                 capture: None,
                 frame: contact,
                 position_controlled,

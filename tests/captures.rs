@@ -2,7 +2,8 @@
 //! guard enters keeps where the table was, and `move approach at found` after the return ends
 //! there, on a table 5 cm lower than demonstrated; a run that reaches the `at` before the
 //! capture fails, naming both. The skill is `tests/data/touch_capture.skill`, learned from the
-//! shipped touch demonstration.
+//! shipped touch demonstration. Also: a goal placed at a capture plus an offset, and a force guard
+//! that only watches (`on watch`) leaving the motion at its speed.
 
 use std::path::PathBuf;
 
@@ -249,4 +250,55 @@ fn a_motion_at_a_capture_with_an_offset_ends_where_the_offset_says() {
             "{offset}: ended {end:?}, target {target:?}"
         );
     }
+}
+
+/// `touch_capture.skill` with `from` replaced by `to`, compiled.
+fn variant(from: &str, to: &str) -> skill_ir::Skill {
+    let text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
+    assert!(text.contains(from), "`{from}` is in the skill");
+    let compiled = skill_compiler::compile_str("touch_capture.skill", &text.replacen(from, to, 1));
+    let Some(program) = compiled.program else {
+        panic!("{to}: {:?}", compiled.diags)
+    };
+    program.skills.into_iter().next().expect("one skill")
+}
+
+/// How long the run stayed in `state`, seconds (1 kHz ticks).
+fn seconds_in(log: &RunLog, state: &str) -> f64 {
+    let index = log.states.iter().position(|name| name == state).expect("logged") as u32;
+    log.ticks.iter().filter(|tick| tick.state == index).count() as f64 * 1e-3
+}
+
+#[test]
+fn a_watching_force_guard_does_not_slow_the_motion_as_an_expected_contact_does() {
+    let (skill, learned) = learn();
+    let (report, log) = run(&skill, &learned, &[]);
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+    let plain = seconds_in(&log, "again");
+    let mut times = Vec::new();
+    for guard in [
+        "on force_magnitude >= 60 N -> stuck",
+        "on watch force_magnitude >= 60 N -> stuck",
+    ] {
+        let guarded = variant(
+            "        on motion_done -> done\n",
+            &format!("        {guard}\n        on motion_done -> done\n"),
+        );
+        let (report, log) = run(&guarded, &learned, &[]);
+        assert_eq!(
+            report.outcome,
+            skill_ir::Outcome::Success,
+            "{guard}: {}",
+            report.message
+        );
+        times.push(seconds_in(&log, "again"));
+    }
+    eprintln!(
+        "`again` took {plain:.3} s plain, {:.3} s with a force guard that expects contact, {:.3} s with the same guard watching",
+        times[0], times[1]
+    );
+    // The guard that expects a contact slows the motion's end to the guarded approach's speed;
+    // the watching one leaves the motion as it runs without the guard.
+    assert!(times[0] > plain + 0.3, "{times:?} against {plain}");
+    assert!((times[1] - plain).abs() < 0.01, "{times:?} against {plain}");
 }

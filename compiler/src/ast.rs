@@ -221,8 +221,10 @@ pub enum StmtKind {
     Repeat(Expr),
     /// `capture NAME`: the tool's pose at entry, kept under NAME for the rest of the run.
     Capture(Ident),
-    /// `on GUARD -> TARGET`.
+    /// `on GUARD -> TARGET`, `on watch GUARD -> TARGET`.
     Transition {
+        /// `watch`: the guard watches for a limit and expects no contact.
+        watch: bool,
         /// The guard.
         guard: Guard,
         /// Where it goes.

@@ -357,7 +357,11 @@ fn statement(stmt: &StmtKind) -> String {
         },
         StmtKind::Repeat(count) => format!("repeat {}", expr(count)),
         StmtKind::Capture(name) => format!("capture {}", name.name),
-        StmtKind::Transition { guard: g, target } => {
+        StmtKind::Transition {
+            watch,
+            guard: g,
+            target,
+        } => {
             let target = match target {
                 Target::State(name) => name.name.clone(),
                 Target::Extend {
@@ -371,7 +375,8 @@ fn statement(stmt: &StmtKind) -> String {
                     then.name
                 ),
             };
-            format!("on {} -> {target}", guard(g))
+            let watch = if *watch { "watch " } else { "" };
+            format!("on {watch}{} -> {target}", guard(g))
         }
     }
 }

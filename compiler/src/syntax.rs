@@ -647,9 +647,14 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
             StmtKind::Capture(ident(inner.next().expect("grammar: capture names a pose")))
         }
         Rule::transition => {
+            let watch = inner.peek().is_some_and(|pair| pair.as_rule() == Rule::watch_kw);
+            if watch {
+                inner.next();
+            }
             let guard_pair = inner.next().expect("grammar: transition has a guard");
             let target_pair = inner.next().expect("grammar: transition has a target");
             StmtKind::Transition {
+                watch,
                 guard: guard(guard_pair),
                 target: target(target_pair),
             }

@@ -36,7 +36,8 @@ use serde::{Deserialize, Serialize};
 ///   place its motion's goal at a captured pose ([`ActiveState::motion_at`]) (both optional: a
 ///   version 5 file reads as a version 6 file without them).
 /// - 7: the goal at a captured pose may be moved on by an offset in a frame's axes
-///   ([`ActiveState::motion_at_offset`]; optional: a version 6 file reads as a version 7 file).
+///   ([`ActiveState::motion_at_offset`]), and a transition may only watch
+///   ([`Transition::watch`]) (both optional: a version 6 file reads as a version 7 file).
 pub const IR_VERSION: u32 = 7;
 
 /// An offset from a captured pose: [`ActiveState::motion_at_offset`].
@@ -878,6 +879,10 @@ pub struct Transition {
     pub action: TransitionAction,
     /// The guard as written, for messages and graphs.
     pub guard_text: String,
+    /// `on watch ...`: the guard watches for a limit; a force in it does not make the state
+    /// approach a contact (slow its motion near the goal). Left out of the JSON when `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub watch: bool,
     /// Where it is written.
     pub span: SourceSpan,
 }

@@ -554,7 +554,7 @@ impl SkillWalk<'_> {
             }
             StmtKind::Repeat(count) => self.value(count),
             StmtKind::Capture(_) => {}
-            StmtKind::Transition { guard, target } => {
+            StmtKind::Transition { guard, target, .. } => {
                 self.guard(guard);
                 match target {
                     Target::State(name) => self.refer(name, &[Kind::State, Kind::Terminal]),

@@ -395,7 +395,7 @@ fn substitute_body(
                     }
                 }
                 StmtKind::Repeat(count) => put(count),
-                StmtKind::Transition { guard, target } => {
+                StmtKind::Transition { guard, target, .. } => {
                     guard_exprs(guard, &mut put);
                     if let Target::Extend { speed, max, .. } = target {
                         put(speed);

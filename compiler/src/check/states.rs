@@ -291,7 +291,7 @@ impl Checker<'_> {
                     repeat_span = Some(stmt.span);
                     repeat = self.repeat_count(count);
                 }
-                StmtKind::Transition { guard, target } => {
+                StmtKind::Transition { watch, guard, target } => {
                     let resolved_guard = self.guard(guard, scope);
                     let action = self.target(target, ids, state_names, scope);
                     if let (Some(resolved_guard), Some(action)) = (resolved_guard, action) {
@@ -306,6 +306,7 @@ impl Checker<'_> {
                                 .split_whitespace()
                                 .collect::<Vec<_>>()
                                 .join(" "),
+                            watch: *watch,
                             span: self.ir_span(stmt.span),
                         };
                         state_transitions.push((transition, guard, stmt.span));
@@ -366,7 +367,7 @@ impl Checker<'_> {
             let lifts = lift_off.is_some_and(|spec| spec.distance_m > 0.0);
             let approaches = approach_span.is_some()
                 || stmts.iter().any(|stmt| match &stmt.kind {
-                    StmtKind::Transition { guard, .. } => mentions_force(guard),
+                    StmtKind::Transition { guard, watch, .. } => !watch && mentions_force(guard),
                     _ => false,
                 });
             self.lift_off_use(state, span, writes_move, lifts && (has_force_axes || approaches));
@@ -465,8 +466,9 @@ impl Checker<'_> {
             self.report(diag);
             return;
         }
+        // A `watch` guard expects no contact: an approach is slowed for guards that do.
         let watches_force = stmts.iter().any(|stmt| match &stmt.kind {
-            StmtKind::Transition { guard, .. } => mentions_force(guard),
+            StmtKind::Transition { guard, watch, .. } => !watch && mentions_force(guard),
             _ => false,
         });
         if !watches_force {

@@ -395,7 +395,7 @@ const GUARD_ZONE_M: f64 = 0.03;
 
 /// The guarded approach of a state with a motion: the one it declares (`approach within D at
 /// V`), whatever its guards; otherwise, if it waits for contact (a force guard on one of its
-/// transitions), its search (`extend ... at V, up to D`) gives the speed and the zone, and
+/// transitions, `on watch` guards left out), its search (`extend ... at V, up to D`) gives the speed and the zone, and
 /// without one [`GUARD_SPEED_MPS`] within [`GUARD_ZONE_M`].
 fn guarded_approach(skill: &ir::Skill, active: &ir::ActiveState) -> Option<GuardedApproach> {
     active.motion?;
@@ -409,7 +409,8 @@ fn guarded_approach(skill: &ir::Skill, active: &ir::ActiveState) -> Option<Guard
     let mut search = None;
     for id in &active.transitions {
         let transition = &skill.transitions[id.index()];
-        expects_contact |= mentions_force(&transition.guard);
+        // `on watch ...` looks out for a limit; it expects no contact.
+        expects_contact |= !transition.watch && mentions_force(&transition.guard);
         if let ir::TransitionAction::Extend { speed_mps, max_m, .. } = transition.action {
             search = Some(GuardedApproach {
                 zone_m: max_m.max(GUARD_ZONE_M),

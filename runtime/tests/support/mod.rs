@@ -247,6 +247,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
                 guard,
                 action,
                 guard_text: String::new(),
+                watch: false,
                 span: span(),
             })
             .collect(),

@@ -302,3 +302,66 @@ fn a_watching_force_guard_does_not_slow_the_motion_as_an_expected_contact_does()
     assert!(times[0] > plain + 0.3, "{times:?} against {plain}");
     assert!((times[1] - plain).abs() < 0.01, "{times:?} against {plain}");
 }
+
+#[test]
+fn a_capture_once_keeps_the_first_pass_of_a_loop() {
+    let (_, learned) = learn();
+    // The touch done twice: `again` goes back to `approach`, whose entry is captured as `start`
+    // (first at the start pose, then where `again` ended, on the table); `home` ends 2 cm above
+    // `start` (clear of the table when `start` is the second pass's).
+    let looped = |capture: &str| {
+        let text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
+        let text = text
+            .replacen(
+                "        move approach from current\n",
+                &format!("        {capture}\n        move approach from current\n"),
+                1,
+            )
+            .replacen(
+                "        move approach at found\n        control position all in contact\n        stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done -> done\n",
+                "        move approach at found\n        control position all in contact\n        stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done and entered(again) >= 2 -> home\n        on motion_done -> approach\n",
+                1,
+            )
+            .replacen(
+                "    terminal done: success\n",
+                "    state home {\n        move retreat at start + [0 mm, 0 mm, 2 cm]\n        control position all in contact\n        stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done -> done\n        on timeout 30 s -> stuck\n    }\n\n    terminal done: success\n",
+                1,
+            );
+        assert!(text.contains("state home") && text.contains("-> home") && text.contains(capture));
+        let compiled = skill_compiler::compile_str("touch_capture.skill", &text);
+        let Some(program) = compiled.program else {
+            panic!("{capture}: {:?}", compiled.diags)
+        };
+        let skill = program.skills.into_iter().next().expect("one skill");
+        let (report, log) = run(&skill, &learned, &[]);
+        assert_eq!(
+            report.outcome,
+            skill_ir::Outcome::Success,
+            "{capture}: {}",
+            report.message
+        );
+        let entries: Vec<[f64; 3]> = report
+            .visits
+            .iter()
+            .filter(|visit| visit.state == "approach")
+            .map(|visit| visit.enter_position_m)
+            .collect();
+        assert_eq!(entries.len(), 2, "{capture}: two passes");
+        let home = last_in(&log, "home");
+        (entries, [home[0], home[1], home[2] - 0.02])
+    };
+    let (entries, home) = looped("capture start once");
+    eprintln!(
+        "`capture start once`: passes entered {:.1} mm apart; home ended {:.2} mm from 2 cm above the first",
+        distance(entries[0], entries[1]) * 1e3,
+        distance(home, entries[0]) * 1e3
+    );
+    assert!(distance(entries[0], entries[1]) > 0.02, "{entries:?}");
+    assert!(distance(home, entries[0]) < 0.005, "{home:?} {entries:?}");
+    let (entries, home) = looped("capture start");
+    eprintln!(
+        "`capture start`: home ended {:.2} mm from 2 cm above the second pass's entry",
+        distance(home, entries[1]) * 1e3
+    );
+    assert!(distance(home, entries[1]) < 0.005, "{home:?} {entries:?}");
+}

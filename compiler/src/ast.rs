@@ -219,8 +219,14 @@ pub enum StmtKind {
     },
     /// `repeat 4`.
     Repeat(Expr),
-    /// `capture NAME`: the tool's pose at entry, kept under NAME for the rest of the run.
-    Capture(Ident),
+    /// `capture NAME`: the tool's pose at entry, kept under NAME for the rest of the run;
+    /// `capture NAME once`: at the first entry only.
+    Capture {
+        /// The name it is kept under.
+        name: Ident,
+        /// `once`: later entries keep the first capture.
+        once: bool,
+    },
     /// `on GUARD -> TARGET`, `on watch GUARD -> TARGET`.
     Transition {
         /// `watch`: the guard watches for a limit and expects no contact.

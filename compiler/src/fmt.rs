@@ -356,7 +356,8 @@ fn statement(stmt: &StmtKind) -> String {
             None => format!("lift off {}", expr(distance)),
         },
         StmtKind::Repeat(count) => format!("repeat {}", expr(count)),
-        StmtKind::Capture(name) => format!("capture {}", name.name),
+        StmtKind::Capture { name, once: false } => format!("capture {}", name.name),
+        StmtKind::Capture { name, once: true } => format!("capture {} once", name.name),
         StmtKind::Transition {
             watch,
             guard: g,

@@ -644,7 +644,10 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
         }
         Rule::capture_stmt => {
             let _keyword = inner.next().expect("grammar: capture keyword");
-            StmtKind::Capture(ident(inner.next().expect("grammar: capture names a pose")))
+            StmtKind::Capture {
+                name: ident(inner.next().expect("grammar: capture names a pose")),
+                once: inner.next().is_some(),
+            }
         }
         Rule::transition => {
             let watch = inner.peek().is_some_and(|pair| pair.as_rule() == Rule::watch_kw);

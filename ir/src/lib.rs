@@ -36,8 +36,9 @@ use serde::{Deserialize, Serialize};
 ///   place its motion's goal at a captured pose ([`ActiveState::motion_at`]) (both optional: a
 ///   version 5 file reads as a version 6 file without them).
 /// - 7: the goal at a captured pose may be moved on by an offset in a frame's axes
-///   ([`ActiveState::motion_at_offset`]), and a transition may only watch
-///   ([`Transition::watch`]) (both optional: a version 6 file reads as a version 7 file).
+///   ([`ActiveState::motion_at_offset`]), a capture may be taken once
+///   ([`ActiveState::capture_once`]) and a transition may only watch ([`Transition::watch`])
+///   (all optional: a version 6 file reads as a version 7 file).
 pub const IR_VERSION: u32 = 7;
 
 /// An offset from a captured pose: [`ActiveState::motion_at_offset`].
@@ -779,10 +780,14 @@ pub struct ActiveState {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion_at_offset: Option<AtOffset>,
     /// `capture NAME`: on entering the state, the tool point's pose (base frame) is stored under
-    /// NAME for the rest of the run; entering again overwrites it. Left out of the JSON when
-    /// `None`.
+    /// NAME for the rest of the run; entering again overwrites it (unless
+    /// [`ActiveState::capture_once`]). Left out of the JSON when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub capture: Option<String>,
+    /// `capture NAME once`: the state captures only while NAME holds no pose yet, so a loop's
+    /// later passes keep the first one. Left out of the JSON when `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub capture_once: bool,
     /// The compliant frame in which selection and stiffness are given.
     pub frame: FrameRef,
     /// Per axis (`x y z rx ry rz` of `frame`): position (`true`, S = 1) or force control.

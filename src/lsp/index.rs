@@ -392,7 +392,7 @@ impl SkillWalk<'_> {
                 continue;
             };
             for stmt in stmts {
-                if let StmtKind::Capture(name) = &stmt.kind {
+                if let StmtKind::Capture { name, .. } = &stmt.kind {
                     match self.index.lookup(Some(self.skill), &name.name, &[Kind::Capture]) {
                         Some(id) if self.index.defs[id].kind == Kind::Capture => {
                             self.index.note(self.file, name.span, What::Def(id))
@@ -553,7 +553,7 @@ impl SkillWalk<'_> {
                 }
             }
             StmtKind::Repeat(count) => self.value(count),
-            StmtKind::Capture(_) => {}
+            StmtKind::Capture { .. } => {}
             StmtKind::Transition { guard, target, .. } => {
                 self.guard(guard);
                 match target {

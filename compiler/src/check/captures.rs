@@ -25,7 +25,7 @@ pub(super) struct Capture {
 /// The names `state` captures.
 fn captures_of(state: &ast::State) -> impl Iterator<Item = &ast::Ident> {
     statements(state).filter_map(|stmt| match &stmt.kind {
-        StmtKind::Capture(name) => Some(name),
+        StmtKind::Capture { name, .. } => Some(name),
         _ => None,
     })
 }

@@ -405,7 +405,7 @@ fn substitute_body(
                 StmtKind::Move {
                     offset: Some(offset), ..
                 } => put(&mut offset.value),
-                StmtKind::Move { .. } | StmtKind::Control { .. } | StmtKind::Apply(_) | StmtKind::Capture(_) => {}
+                StmtKind::Move { .. } | StmtKind::Control { .. } | StmtKind::Apply(_) | StmtKind::Capture { .. } => {}
             }
         }
     }

@@ -174,6 +174,7 @@ impl Checker<'_> {
         let mut motion_at = None;
         let mut motion_at_offset = None;
         let mut capture = None;
+        let mut capture_once = false;
         let mut frame = ir::FrameRef::Base;
         let mut position_controlled = [true; 6];
         let mut control_span = None;
@@ -202,7 +203,7 @@ impl Checker<'_> {
                 StmtKind::Approach { .. } => Some("approach"),
                 StmtKind::LiftOff { .. } => Some("lift off"),
                 StmtKind::Repeat(_) => Some("repeat"),
-                StmtKind::Capture(_) => Some("capture"),
+                StmtKind::Capture { .. } => Some("capture"),
                 StmtKind::Transition { .. } => None,
             };
             if let Some(keyword) = keyword {
@@ -248,7 +249,10 @@ impl Checker<'_> {
                         }
                     }
                 }
-                StmtKind::Capture(name) => capture = Some(name.name.clone()),
+                StmtKind::Capture { name, once } => {
+                    capture = Some(name.name.clone());
+                    capture_once = *once;
+                }
                 StmtKind::Control {
                     groups,
                     frame: frame_name,
@@ -400,6 +404,7 @@ impl Checker<'_> {
             motion_at,
             motion_at_offset,
             capture,
+            capture_once,
             frame,
             position_controlled,
             stiffness,

@@ -548,7 +548,9 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.entry_tool = rig.tool();
         let Some(active) = self.active() else { return Ok(()) };
         if let Some(name) = &active.capture {
-            self.captures.insert(name.clone(), self.entry_tool);
+            if !(active.capture_once && self.captures.contains_key(name)) {
+                self.captures.insert(name.clone(), self.entry_tool);
+            }
         }
         self.guarded = guarded_approach(self.skill(), active);
         self.follow = NormalFollow::of(self.bound, active, t);

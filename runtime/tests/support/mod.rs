@@ -94,6 +94,7 @@ pub(crate) fn touch(spec: Touch) -> ir::Skill {
                 motion_at: None,
                 motion_at_offset: None,
                 capture: None,
+                capture_once: false,
                 frame: contact,
                 position_controlled,
                 stiffness,

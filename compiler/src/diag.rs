@@ -182,6 +182,9 @@ codes! {
     /// `on timeout 0 s -> next` (or `dwell 0 s`, alone or in an `or`) in a state that moves or
     /// force-controls an axis: the state is left at its entry, before its motion or force runs.
     EndsOnEntry => "skill::lint::ends_on_entry", Warning;
+    /// `// allow(NAME): REASON` that names no lint, names an error, gives no reason, or silences
+    /// nothing on its line (or, alone on a line, the next line with code).
+    UnusedAllow => "skill::lint::unused_allow", Warning;
 }
 
 impl fmt::Display for Code {

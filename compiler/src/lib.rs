@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+mod allow;
 pub mod ast;
 mod check;
 pub mod diag;
@@ -287,6 +288,9 @@ pub fn compile_with_params(
         }
     }
 
+    for (file, source) in files.iter().enumerate() {
+        allow::apply(file, source, &mut diags);
+    }
     diags.sort_by_key(|d| (d.file, d.span().start, d.code));
     let has_errors = diags.iter().any(|d| d.severity() == Severity::Error);
     let program = (!has_errors).then(|| ir::Program {

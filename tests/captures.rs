@@ -365,3 +365,29 @@ fn a_capture_once_keeps_the_first_pass_of_a_loop() {
     );
     assert!(distance(home, entries[1]) < 0.005, "{home:?} {entries:?}");
 }
+
+#[test]
+fn a_moved_since_guard_measures_from_the_capture() {
+    let (_, learned) = learn();
+    // `again` runs back to the found point; leaving it once within 2 cm of it ends it early.
+    let guarded = variant(
+        "        on motion_done -> done\n",
+        "        on moved since found <= 2 cm -> done\n        on motion_done -> done\n",
+    );
+    let (report, log) = run(&guarded, &learned, &["table.z=0.225"]);
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+    let found = entered(&report, "settle");
+    let end = last_in(&log, "again");
+    eprintln!(
+        "`moved since found <= 2 cm`: `again` left {:.2} mm from the found point",
+        distance(found, end) * 1e3
+    );
+    // The guard fires where the tool comes within 2 cm; the last tick logged in `again` is within
+    // a tick's travel of that (the return moves well under 0.5 mm a tick).
+    // (The motion itself ends within 5 mm of the found point: an exit 2 cm away is the guard's.)
+    assert!(
+        (distance(found, end) - 0.02).abs() < 0.0005,
+        "{:.5} m",
+        distance(found, end)
+    );
+}

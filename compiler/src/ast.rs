@@ -351,6 +351,8 @@ pub enum GuardKind {
     Moved {
         /// The axis, if written.
         axis: Option<AxisRef>,
+        /// `since NAME`: measured from the pose `capture NAME` kept instead of the entry.
+        since: Option<Ident>,
         /// The comparison.
         op: CmpOp,
         /// The right-hand side: a length, or an angle for a rotation axis.

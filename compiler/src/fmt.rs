@@ -421,16 +421,15 @@ pub fn guard(g: &Guard) -> String {
                 expr(rhs)
             )
         }
-        GuardKind::Moved { axis, op, rhs } => match axis {
-            Some(axis) => format!(
-                "moved({}.{}) {} {}",
-                axis.frame.name,
-                axis.axis.name,
-                op.as_str(),
-                expr(rhs)
-            ),
-            None => format!("moved {} {}", op.as_str(), expr(rhs)),
-        },
+        GuardKind::Moved { axis, since, op, rhs } => {
+            let axis = axis.as_ref().map_or(String::new(), |axis| {
+                format!("({}.{})", axis.frame.name, axis.axis.name)
+            });
+            let since = since
+                .as_ref()
+                .map_or(String::new(), |name| format!(" since {}", name.name));
+            format!("moved{axis}{since} {} {}", op.as_str(), expr(rhs))
+        }
         GuardKind::Magnitude { moment, op, rhs } => format!(
             "{} {} {}",
             if *moment { "moment_magnitude" } else { "force_magnitude" },

@@ -791,9 +791,13 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
                 Some(Rule::axis_ref) => Some(axis_ref(inner.next().expect("peeked"))),
                 _ => None,
             };
+            let since = match inner.peek().map(Pair::as_rule) {
+                Some(Rule::since_clause) => inner.next().expect("peeked").into_inner().nth(1).map(ident),
+                _ => None,
+            };
             let (op, rhs) = comparison(&mut inner);
             Guard {
-                kind: GuardKind::Moved { axis, op, rhs },
+                kind: GuardKind::Moved { axis, since, op, rhs },
                 span,
             }
         }

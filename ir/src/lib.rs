@@ -37,8 +37,9 @@ use serde::{Deserialize, Serialize};
 ///   version 5 file reads as a version 6 file without them).
 /// - 7: the goal at a captured pose may be moved on by an offset in a frame's axes
 ///   ([`ActiveState::motion_at_offset`]), a capture may be taken once
-///   ([`ActiveState::capture_once`]) and a transition may only watch ([`Transition::watch`])
-///   (all optional: a version 6 file reads as a version 7 file).
+///   ([`ActiveState::capture_once`]), a transition may only watch ([`Transition::watch`]), and
+///   guards may be [`Guard::MovedSince`] (all optional or new variants: a version 6 file reads
+///   as a version 7 file).
 pub const IR_VERSION: u32 = 7;
 
 /// An offset from a captured pose: [`ActiveState::motion_at_offset`].
@@ -960,6 +961,16 @@ pub enum Guard {
     /// The distance of the tool point from where it was when the state was entered, in any
     /// direction, compared with `value_m`.
     MovedDistance {
+        /// The comparison.
+        op: Comparison,
+        /// The right-hand side \[m\].
+        value_m: f64,
+    },
+    /// The distance of the tool point from where `capture NAME` kept it (`moved since NAME`),
+    /// compared with `value_m`; false while the run has not captured NAME.
+    MovedSince {
+        /// The capture measured from.
+        capture: String,
         /// The comparison.
         op: Comparison,
         /// The right-hand side \[m\].

@@ -583,9 +583,12 @@ impl SkillWalk<'_> {
                 self.refer(&axis.frame, &[Kind::Frame]);
                 self.value(rhs);
             }
-            GuardKind::Moved { axis, rhs, .. } => {
+            GuardKind::Moved { axis, since, rhs, .. } => {
                 if let Some(axis) = axis {
                     self.refer(&axis.frame, &[Kind::Frame]);
+                }
+                if let Some(since) = since {
+                    self.refer(since, &[Kind::Capture]);
                 }
                 self.value(rhs);
             }

@@ -105,6 +105,29 @@ impl Checker<'_> {
         relative: bool,
         scope: &mut SkillScope,
     ) -> Option<String> {
+        self.capture_named(at, scope)?;
+        if relative {
+            let diag = self
+                .diag(
+                    Code::RelativeAndAt,
+                    at.span,
+                    format!("`move {}` is both `relative` and `at {}`", motion.name, at.name),
+                    "choose one",
+                )
+                .help(format!(
+                    "`relative` runs the demonstrated shape from where the state begins, `at {1}` ends the motion \
+                     at the captured pose: write `move {0} at {1}` or `move {0} relative`",
+                    motion.name, at.name
+                ));
+            self.report(diag);
+            return None;
+        }
+        Some(at.name.clone())
+    }
+
+    /// The capture `at` names, marked used; `unknown_capture` (with the nearest name) when no
+    /// state captures it.
+    pub(super) fn capture_named(&mut self, at: &ast::Ident, scope: &mut SkillScope) -> Option<String> {
         let Some(capture) = scope.captures.iter_mut().find(|c| c.name == at.name) else {
             let names: Vec<&str> = scope.captures.iter().map(|c| c.name.as_str()).collect();
             let help = suggest(&at.name, names.iter().copied()).unwrap_or_else(|| {
@@ -133,22 +156,6 @@ impl Checker<'_> {
             return None;
         };
         capture.used = true;
-        if relative {
-            let diag = self
-                .diag(
-                    Code::RelativeAndAt,
-                    at.span,
-                    format!("`move {}` is both `relative` and `at {}`", motion.name, at.name),
-                    "choose one",
-                )
-                .help(format!(
-                    "`relative` runs the demonstrated shape from where the state begins, `at {1}` ends the motion \
-                     at the captured pose: write `move {0} at {1}` or `move {0} relative`",
-                    motion.name, at.name
-                ));
-            self.report(diag);
-            return None;
-        }
         Some(at.name.clone())
     }
 
@@ -160,7 +167,7 @@ impl Checker<'_> {
                     Code::UnusedCapture,
                     capture.span,
                     format!(
-                        "`{}` is captured but no `move ... at {}` uses it",
+                        "`{}` is captured but no `move ... at {}` or `moved since` uses it",
                         capture.name, capture.name
                     ),
                     "never used",

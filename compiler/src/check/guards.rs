@@ -59,7 +59,32 @@ impl Checker<'_> {
                     rhs: rhs?,
                 })
             }
-            GuardKind::Moved { axis, op, rhs } => {
+            GuardKind::Moved {
+                since: Some(capture),
+                axis,
+                op,
+                rhs,
+            } => {
+                if let Some(axis) = axis {
+                    let diag = self
+                        .diag(
+                            Code::BadArgument,
+                            axis.frame.span.to(axis.axis.span),
+                            format!("`moved since {}` measures a distance, not along an axis", capture.name),
+                            "an axis",
+                        )
+                        .help(format!("write `moved since {} >= 3 mm`", capture.name));
+                    self.report(diag);
+                }
+                let capture = self.capture_named(capture, scope);
+                let value = self.quantity(rhs, Dim::Length, "`moved since`");
+                Some(ir::Guard::MovedSince {
+                    capture: capture?,
+                    op: comparison(*op),
+                    value_m: value?,
+                })
+            }
+            GuardKind::Moved { axis, op, rhs, .. } => {
                 let along = axis.as_ref().map(|axis| self.frame_axis(axis, false, scope));
                 let (dim, what) = match along {
                     Some(Some(along)) if along.axis.is_rotation() => (Dim::Angle, "`moved` about a rotation axis"),
@@ -742,6 +767,7 @@ fn impossible_atom(guard: &ir::Guard, runs_dmp: bool, has_force_axes: bool) -> O
                 rhs: ir::Threshold::Literal { value },
             }
             | ir::Guard::MovedDistance { op, value_m: value }
+            | ir::Guard::MovedSince { op, value_m: value, .. }
             | ir::Guard::Speed { op, value_mps: value }
                 if below_zero(*op, *value) =>
             {
@@ -783,7 +809,7 @@ fn only_force_or_movement_atoms(guard: &ir::Guard) -> bool {
         match guard {
             ir::Guard::And { all: parts } | ir::Guard::Or { any: parts } => parts.iter().all(all),
             ir::Guard::Not { guard } | ir::Guard::Held { guard, .. } => all(guard),
-            ir::Guard::Moved { .. } | ir::Guard::MovedDistance { .. } => true,
+            ir::Guard::Moved { .. } | ir::Guard::MovedDistance { .. } | ir::Guard::MovedSince { .. } => true,
             other => only_force_atoms(other),
         }
     }

@@ -853,6 +853,12 @@ impl<'b, 'a> Machine<'b, 'a> {
                 let moved = rig.tool().translation.vector - self.entry_tool.translation.vector;
                 op.holds(moved.norm(), *value_m)
             }
+            ir::Guard::MovedSince { capture, op, value_m } => self.captures.get(capture).is_some_and(|kept| {
+                op.holds(
+                    (rig.tool().translation.vector - kept.translation.vector).norm(),
+                    *value_m,
+                )
+            }),
             ir::Guard::ForceMagnitude { op, rhs } => {
                 op.holds(sensed.applied.fixed_rows::<3>(0).norm(), self.scaled_threshold(*rhs))
             }

@@ -489,7 +489,14 @@ fn expr(e: &Expr) -> String {
             let operand = |e: &Expr, leading: bool| match &e.kind {
                 ExprKind::Arith { rest: inner, .. } => {
                     let inner_additive = inner.first().is_some_and(|(op, _)| op.is_additive());
-                    if (inner_additive && !(additive && leading)) || (!inner_additive && !additive && !leading) {
+                    let grouped = if inner_additive {
+                        // A sum in a product, or after an operator of a sum: `a - (b + c)`.
+                        !(additive && leading)
+                    } else {
+                        // A product after an operator of a product: `a / (b * c)`.
+                        !additive && !leading
+                    };
+                    if grouped {
                         format!("({})", expr(e))
                     } else {
                         expr(e)

@@ -436,6 +436,11 @@ fn statements() -> Vec<CompletionItem> {
             "capture ${1:name}",
             "keep the tool's pose at entry under a name",
         ),
+        (
+            "capture once",
+            "capture ${1:name} once",
+            "keep the tool's pose at the first entry only",
+        ),
         ("on", "on ${1:motion_done} -> ${2:state}", "a transition"),
     ])
 }
@@ -467,6 +472,16 @@ fn guards() -> Vec<CompletionItem> {
             "moved",
             "moved >= ${1:5 cm}",
             "the tool point's displacement since entry",
+        ),
+        (
+            "moved since",
+            "moved since ${1:found} >= ${2:3 mm}",
+            "the tool point's distance from a captured pose",
+        ),
+        (
+            "watch",
+            "watch ${1:force_magnitude >= 30 N}",
+            "a safety stop: fires, but expects no contact",
         ),
         ("speed", "speed < ${1:5 mm/s}", "the tool point's measured speed"),
         (

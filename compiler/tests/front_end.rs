@@ -870,3 +870,51 @@ fn an_offset_from_a_capture_is_three_lengths_in_a_known_frame() {
         );
     }
 }
+
+#[test]
+fn a_vector_parameter_is_an_offset_a_step_or_flag_may_set() {
+    const TEXT: &str = "skill s {\n    /// Where to end, from the found point.\n    param lift = [0 mm, 0 mm, 5 mm]\n    learn {\n        motion m = dmp(segment 1)\n    }\n    state a {\n        capture found\n        move m from current\n        on motion_done -> b\n    }\n    state b {\n        move m at found + lift in tool\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
+    let compile = |params: &[&str]| {
+        let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
+        skill_compiler::compile_with_params(
+            skill_compiler::SourceFile::new("s.skill", TEXT),
+            &params,
+            &mut |_path| {
+                Err(LoadError {
+                    reason: "no imports here".into(),
+                })
+            },
+        )
+    };
+    let offset_of = |compiled: &Compilation| {
+        let program = compiled
+            .program
+            .as_ref()
+            .unwrap_or_else(|| panic!("{:?}", compiled.diags));
+        let skill = &program.skills[0];
+        let skill_ir::StateKind::Active(active) = &skill.states[1].kind else {
+            panic!("`b` is active")
+        };
+        let offset = active.motion_at_offset.as_ref().expect("an offset").offset_m;
+        (offset, skill.params[0].vector_si)
+    };
+    let (offset, listed) = offset_of(&compile(&[]));
+    assert_eq!(offset, [0.0, 0.0, 0.005]);
+    assert_eq!(listed, Some([0.0, 0.0, 0.005]));
+    let (offset, _) = offset_of(&compile(&["lift=[1 mm, 2 * 1 mm, 1 cm]"]));
+    assert!(
+        (offset[1] - 0.002).abs() < 1e-12 && (offset[2] - 0.01).abs() < 1e-12,
+        "{offset:?}"
+    );
+    let refused = compile(&["lift=[1 mm, 2 mm]"]);
+    let diag = refused
+        .diags
+        .iter()
+        .find(|d| d.code == Code::UnitMismatch)
+        .expect("refused");
+    assert!(
+        diag.message.contains("is a list of three values, each a length"),
+        "{}",
+        diag.message
+    );
+}

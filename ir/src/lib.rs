@@ -170,8 +170,12 @@ pub struct Skill {
 pub struct Param {
     /// Its name.
     pub name: String,
-    /// The value in SI units (a plain number for a dimensionless parameter).
+    /// The value in SI units (a plain number for a dimensionless parameter; 0 for a vector).
     pub value_si: f64,
+    /// A vector parameter's three values in SI units (`param lift = [0 mm, 0 mm, 5 mm]`).
+    /// Left out of the JSON for a number or a quantity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vector_si: Option<[f64; 3]>,
     /// The SI unit of the value (`s`, `m`, `N`, ...), empty for a plain number.
     pub unit: String,
     /// Who set the value.

@@ -33,6 +33,8 @@ const RESERVED_IN_STATES: [&str; 3] = ["inf", "reset_integral", "tare"];
 enum Shape {
     Number,
     Quantity(Dim),
+    /// Three quantities of one dimension: `[0 mm, 0 mm, 5 mm]`.
+    Vector(Dim),
 }
 
 impl Shape {
@@ -40,6 +42,15 @@ impl Shape {
         match &expr.kind {
             ExprKind::Number(_) => Some(Shape::Number),
             ExprKind::Quantity { unit, .. } => units::lookup(&unit.name).map(|(dim, _)| Shape::Quantity(dim)),
+            ExprKind::List(items) if items.len() == 3 => {
+                let dims: Vec<Option<Shape>> = items.iter().map(Shape::of).collect();
+                match dims[0] {
+                    Some(Shape::Quantity(dim)) if dims.iter().all(|d| *d == Some(Shape::Quantity(dim))) => {
+                        Some(Shape::Vector(dim))
+                    }
+                    _ => None,
+                }
+            }
             _ => None,
         }
     }
@@ -48,6 +59,7 @@ impl Shape {
         match self {
             Shape::Number => "a plain number".to_string(),
             Shape::Quantity(dim) => dim.describe().to_string(),
+            Shape::Vector(dim) => format!("a list of three values, each {}", dim.describe()),
         }
     }
 
@@ -55,6 +67,10 @@ impl Shape {
         match self {
             Shape::Number => "3".to_string(),
             Shape::Quantity(dim) => format!("2 {}", dim.example_unit()),
+            Shape::Vector(dim) => {
+                let unit = dim.example_unit();
+                format!("[0 {unit}, 0 {unit}, 5 {unit}]")
+            }
         }
     }
 }
@@ -119,17 +135,24 @@ impl Checker<'_> {
         lowered.params = bound
             .iter()
             .filter_map(|b| {
+                let si = |expr: &ast::Expr| match &expr.kind {
+                    ExprKind::Quantity { number, unit } => units::lookup(&unit.name).map(|(_, f)| number.value * f),
+                    _ => None,
+                };
+                let mut vector_si = None;
                 let (value_si, unit) = match (&b.value.kind, b.shape) {
                     (ExprKind::Number(number), Shape::Number) => (number.value, String::new()),
-                    (ExprKind::Quantity { number, unit }, Shape::Quantity(dim)) => {
-                        let (_, factor) = units::lookup(&unit.name)?;
-                        (number.value * factor, si_unit(dim).to_string())
+                    (ExprKind::Quantity { .. }, Shape::Quantity(dim)) => (si(&b.value)?, si_unit(dim).to_string()),
+                    (ExprKind::List(items), Shape::Vector(dim)) => {
+                        vector_si = Some([si(&items[0])?, si(&items[1])?, si(&items[2])?]);
+                        (0.0, si_unit(dim).to_string())
                     }
                     _ => return None,
                 };
                 Some(ir::Param {
                     name: b.decl.name.name.clone(),
                     value_si,
+                    vector_si,
                     unit,
                     set_by: b.source.clone(),
                     doc: b.decl.doc.join("\n"),
@@ -204,7 +227,10 @@ impl Checker<'_> {
                 let mut diag = self.diag(
                     Code::BadArgument,
                     decl.value.span,
-                    format!("parameter `{}` needs a number or a quantity as its default", name.name),
+                    format!(
+                        "parameter `{}` needs a number, a quantity or three quantities as its default",
+                        name.name
+                    ),
                     "not a number or a quantity",
                 );
                 diag = match &decl.value.kind {
@@ -214,8 +240,8 @@ impl Checker<'_> {
                         units::UNITS.iter().map(|(n, _, _)| *n).collect::<Vec<_>>().join(", ")
                     )),
                     _ => diag.help(format!(
-                        "write e.g. `param {} = 2 s` or `param {} = 3`",
-                        name.name, name.name
+                        "write e.g. `param {0} = 2 s`, `param {0} = 3` or `param {0} = [0 mm, 0 mm, 5 mm]`",
+                        name.name
                     )),
                 };
                 self.report(diag);
@@ -333,6 +359,7 @@ fn finite_literal(expr: &ast::Expr) -> bool {
             let factor = units::lookup(&unit.name).map_or(1.0, |(_, factor)| factor);
             (number.value * factor).is_finite()
         }
+        ExprKind::List(items) => items.iter().all(finite_literal),
         _ => true,
     }
 }

@@ -176,8 +176,9 @@ codes! {
     LiftOffIgnored => "skill::lint::lift_off_ignored", Warning;
     /// `capture found` that no `move ... at found` uses.
     UnusedCapture => "skill::lint::unused_capture", Warning;
-    /// `move back at found` in a state the run can reach from the initial state without passing
-    /// through a state with `capture found`: the run fails there if it does.
+    /// `move back at found` (or a guard `moved since found ...`) in a state the run can reach from
+    /// the initial state without passing through a state with `capture found`: the run fails
+    /// there if it does (the guard is false there).
     AtBeforeCapture => "skill::lint::at_before_capture", Warning;
     /// `on timeout 0 s -> next` (or `dwell 0 s`, alone or in an `or`) in a state that moves or
     /// force-controls an axis: the state is left at its entry, before its motion or force runs.

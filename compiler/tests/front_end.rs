@@ -918,3 +918,21 @@ fn a_vector_parameter_is_an_offset_a_step_or_flag_may_set() {
         diag.message
     );
 }
+
+#[test]
+fn a_moved_since_guard_before_its_capture_is_warned_of() {
+    let text = "skill s {\n    learn {\n        motion m = dmp(segment 1)\n    }\n    state a {\n        move m from current\n        on moved since found >= 1 cm -> b\n        on motion_done -> b\n    }\n    state b {\n        capture found\n        move m from current\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
+    let compiled = skill_compiler::compile_str("s.skill", text);
+    let diag = compiled
+        .diags
+        .iter()
+        .find(|d| d.code == Code::AtBeforeCapture)
+        .unwrap_or_else(|| panic!("{:?}", compiled.diags));
+    assert_eq!(diag.message, "state `a` can be reached before `found` is captured");
+    assert!(diag
+        .help
+        .as_deref()
+        .unwrap_or("")
+        .contains("`moved since` is false on that path"));
+    assert!(compiled.program.is_some(), "a warning, not an error");
+}

@@ -38,6 +38,25 @@ fn moves_at(state: &ast::State) -> impl Iterator<Item = &ast::Ident> {
     })
 }
 
+/// The `since NAME` of `state`'s guards (`moved since NAME >= D`).
+fn guards_since(state: &ast::State) -> Vec<&ast::Ident> {
+    fn walk<'g>(guard: &'g ast::Guard, out: &mut Vec<&'g ast::Ident>) {
+        match &guard.kind {
+            ast::GuardKind::Or(guards) | ast::GuardKind::And(guards) => guards.iter().for_each(|g| walk(g, out)),
+            ast::GuardKind::Not(inner) | ast::GuardKind::Held { guard: inner, .. } => walk(inner, out),
+            ast::GuardKind::Moved { since: Some(name), .. } => out.push(name),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for stmt in statements(state) {
+        if let StmtKind::Transition { guard, .. } = &stmt.kind {
+            walk(guard, &mut out);
+        }
+    }
+    out
+}
+
 fn statements(state: &ast::State) -> std::slice::Iter<'_, ast::Stmt> {
     match &state.body {
         ast::StateBody::Active(stmts) => stmts.iter(),
@@ -207,7 +226,14 @@ impl Checker<'_> {
                 .map(|&index| states[index].name.name.as_str())
                 .collect();
             for (index, state) in states.iter().enumerate().filter(|(index, _)| reached[*index]) {
-                for at in moves_at(state).filter(|at| at.name == capture.name) {
+                let uses = moves_at(state)
+                    .map(|at| (at, "the run fails if it takes that path"))
+                    .chain(
+                        guards_since(state)
+                            .into_iter()
+                            .map(|at| (at, "`moved since` is false on that path")),
+                    );
+                for (at, consequence) in uses.filter(|(at, _)| at.name == capture.name) {
                     let diag = self
                         .diag(
                             Code::AtBeforeCapture,
@@ -221,7 +247,7 @@ impl Checker<'_> {
                         .label(capture.span, "captured here")
                         .help(format!(
                             "`{}` is captured on entering {}; a path from `{}` reaches `{}` without entering it, and \
-                             the run fails if it takes that path",
+                             {consequence}",
                             capture.name,
                             join_ticked(&capturers),
                             states[0].name.name,

@@ -483,8 +483,16 @@ fn substitute(expr: &mut ast::Expr, values: &HashMap<&str, &ast::Expr>, used: &m
 /// `expr` with every span set to `span`.
 fn respan(mut expr: ast::Expr, span: crate::source::Span) -> ast::Expr {
     expr.span = span;
-    if let ExprKind::Quantity { number: _, unit } = &mut expr.kind {
-        unit.span = span;
+    match &mut expr.kind {
+        ExprKind::Quantity { number: _, unit } => unit.span = span,
+        // A vector's values may come from another file (a step's, `--param`'s): a message about
+        // one of them points at the use.
+        ExprKind::List(items) => {
+            for item in items.iter_mut() {
+                *item = respan(item.clone(), span);
+            }
+        }
+        _ => {}
     }
     expr
 }

@@ -279,3 +279,40 @@ fn the_extension_launches_skillc_lsp_for_skill_files() {
         "skillc"
     );
 }
+
+#[test]
+fn neovim_hovers_goes_to_definition_and_shows_diagnostics_as_you_type() {
+    // Debian's Neovim (0.7) is enough: the script starts the client with `vim.lsp.start_client`.
+    let found = std::process::Command::new("nvim").arg("--version").output();
+    if !found.is_ok_and(|output| output.status.success()) {
+        eprintln!("skipped: `nvim` is not installed (apt-get install neovim runs this test)");
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("skillc-neovim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let file = dir.join("arithmetic.skill");
+    std::fs::copy(root.join("compiler/tests/corpus/ok/arithmetic.skill"), &file).expect("copied");
+    let out = dir.join("out.txt");
+    let status = std::process::Command::new("timeout")
+        .args(["60", "nvim", "--headless", "-n", "-u", "NONE", "-c"])
+        .arg(format!("luafile {}", root.join("tests/data/lsp/neovim.lua").display()))
+        .env("SKILLC", env!("CARGO_BIN_EXE_skillc"))
+        .env("FILE", &file)
+        .env("OUT", &out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .expect("nvim runs");
+    let text = std::fs::read_to_string(&out).unwrap_or_default();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(status.success(), "nvim ended with {status}: {text}");
+    assert!(text.contains("initialized: true offset_encoding: utf-16"), "{text}");
+    assert!(text.contains("param hold = 2 s"), "hover shows the default: {text}");
+    // The declaration of `hold`: line 9 (0-based 8), after `param `.
+    assert!(text.contains("character = 10,\n      line = 8"), "definition: {text}");
+    assert!(
+        text.contains("multiplies a duration by a length") && text.contains("[skill::check::bad_arithmetic]"),
+        "the diagnostic as you type: {text}"
+    );
+}

@@ -314,7 +314,7 @@ fn print_diags(compilation: &skill_compiler::Compilation) {
 
 fn check(files: &[PathBuf], format: Format, deny_warnings: bool, verbosity: Verbosity) -> u8 {
     let mut unreadable = 0;
-    let (mut errors, mut warnings) = (0, 0);
+    let (mut errors, mut warnings, mut allowed) = (0, 0, 0);
     for path in files {
         let compilation = match frontend::compile_path(path) {
             Ok(compilation) => compilation,
@@ -327,6 +327,7 @@ fn check(files: &[PathBuf], format: Format, deny_warnings: bool, verbosity: Verb
         let (e, w) = render::counts(&compilation.diags);
         errors += e;
         warnings += w;
+        allowed += compilation.allowed;
         match format {
             Format::Human => print_diags(&compilation),
             Format::Json => {
@@ -357,6 +358,9 @@ fn check(files: &[PathBuf], format: Format, deny_warnings: bool, verbosity: Verb
                 plural(warnings, "warning")
             )
         };
+        if allowed > 0 {
+            let _ = write!(line, " ({} allowed)", plural(allowed, "warning"));
+        }
         if unreadable > 0 {
             let _ = write!(line, "; {} could not be read", plural(unreadable, "file"));
         }
@@ -473,6 +477,7 @@ fn fmt(files: &[PathBuf], check_only: bool, verbosity: Verbosity) -> u8 {
                     diags: vec![diag],
                     ast: Default::default(),
                     program: None,
+                    allowed: 0,
                 };
                 print_diags(&compilation);
                 status = status.max(1);
@@ -486,6 +491,7 @@ fn fmt(files: &[PathBuf], check_only: bool, verbosity: Verbosity) -> u8 {
                 diags,
                 ast,
                 program: None,
+                allowed: 0,
             };
             print_diags(&compilation);
             eprintln!("error: `{name}` does not parse; not formatted");

@@ -37,6 +37,21 @@ fn check_exits_zero_on_the_standard_library() {
 }
 
 #[test]
+fn check_counts_the_warnings_allowed_on_purpose_and_denies_none_of_them() {
+    let out = skillc(&[
+        "check",
+        "--deny-warnings",
+        "compiler/tests/corpus/ok/allowed_lint.skill",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("checked 1 file: no problems (1 warning allowed)"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn check_exits_one_on_errors_and_two_on_a_missing_file() {
     let out = skillc(&["check", "compiler/tests/corpus/err/check/unknown_name.skill"]);
     assert_eq!(out.status.code(), Some(1));

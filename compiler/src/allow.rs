@@ -23,12 +23,13 @@ struct Allow {
 }
 
 /// Drops the warnings of `file` that an allow there silences, and reports each allow that is
-/// wrong or silences nothing.
-pub(crate) fn apply(file: usize, source: &SourceFile, diags: &mut Vec<Diag>) {
+/// wrong or silences nothing; how many warnings it dropped.
+pub(crate) fn apply(file: usize, source: &SourceFile, diags: &mut Vec<Diag>) -> usize {
     let allows = allows_in(&source.text);
     if allows.is_empty() {
-        return;
+        return 0;
     }
+    let mut dropped = 0;
     let lines: Vec<usize> = line_starts(&source.text);
     let line_of = |offset: usize| lines.partition_point(|&start| start <= offset).saturating_sub(1);
     let mut problems = Vec::new();
@@ -61,6 +62,7 @@ pub(crate) fn apply(file: usize, source: &SourceFile, diags: &mut Vec<Diag>) {
             Some(code) => {
                 let before = diags.len();
                 diags.retain(|d| !(d.file == file && d.code == code && line_of(d.span().start) == allow.line));
+                dropped += before - diags.len();
                 (diags.len() == before).then(|| {
                     (
                         format!("`allow({})` silences nothing", allow.name),
@@ -78,6 +80,7 @@ pub(crate) fn apply(file: usize, source: &SourceFile, diags: &mut Vec<Diag>) {
         }
     }
     diags.extend(problems);
+    dropped
 }
 
 fn line_starts(text: &str) -> Vec<usize> {

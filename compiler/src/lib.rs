@@ -49,6 +49,8 @@ pub struct Compilation {
     pub ast: ast::File,
     /// The IR, present exactly when there is no error.
     pub program: Option<ir::Program>,
+    /// How many warnings `// allow(LINT): REASON` comments silenced (left out of `diags`).
+    pub allowed: usize,
 }
 
 impl Compilation {
@@ -118,6 +120,7 @@ pub fn compile_bytes(
                 diags: vec![diag],
                 ast: Default::default(),
                 program: None,
+                allowed: 0,
             }
         }
     }
@@ -288,8 +291,9 @@ pub fn compile_with_params(
         }
     }
 
+    let mut allowed = 0;
     for (file, source) in files.iter().enumerate() {
-        allow::apply(file, source, &mut diags);
+        allowed += allow::apply(file, source, &mut diags);
     }
     diags.sort_by_key(|d| (d.file, d.span().start, d.code));
     let has_errors = diags.iter().any(|d| d.severity() == Severity::Error);
@@ -305,6 +309,7 @@ pub fn compile_with_params(
         diags,
         ast: root_ast,
         program,
+        allowed,
     }
 }
 

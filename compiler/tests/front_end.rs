@@ -936,3 +936,50 @@ fn a_moved_since_guard_before_its_capture_is_warned_of() {
         .contains("`moved since` is false on that path"));
     assert!(compiled.program.is_some(), "a warning, not an error");
 }
+
+/// Broken arithmetic in a default and in a guard, and two legal ones (whose guards the never-fires
+/// analysis compares through the arithmetic: `p + 1 mm` after `p` would be shadowed).
+#[test]
+fn broken_arithmetic_is_an_error_never_a_panic() {
+    let values = [
+        "1 mm +",
+        "+ 1 mm",
+        "1 mm + * 2",
+        "(1 mm",
+        "1 mm)",
+        "- - - -",
+        "1 mm / 0",
+        "1 mm / (1 - 1)",
+        "1e308 m * 1e308",
+        "-1e308 m - 1e308 m",
+        "2 * [1 mm, 2 mm, 3 mm]",
+        "\"a\" + 1",
+        "1 mm + 1 mm/s",
+        "1 / 3 * 3 mm",
+        "1 mm //",
+        "1 mm -> x",
+        "((((((((1 mm))))))))",
+        "1 mm * -",
+    ];
+    for value in values {
+        let text = format!(
+            "skill s {{\n    param p = {value}\n    learn {{\n        motion m = dmp(segment 1)\n    }}\n    state a {{\n        move m from current\n        on moved >= {value} + 1 mm -> d\n        on moved >= p -> d\n        on timeout 5 s -> d\n    }}\n    terminal d: success\n}}\n"
+        );
+        let compiled = std::panic::catch_unwind(|| skill_compiler::compile_str("s.skill", &text));
+        let compiled = compiled.unwrap_or_else(|_| panic!("`{value}` panicked"));
+        let legal = ["1 / 3 * 3 mm", "((((((((1 mm))))))))"].contains(&value);
+        assert_eq!(compiled.program.is_some(), legal, "`{value}`: {:?}", compiled.diags);
+        if !legal {
+            assert!(compiled.has_errors(), "`{value}`: an error, not silence");
+        }
+        // Whatever parsed formats to text that parses again.
+        let source = skill_compiler::SourceFile::new("s.skill", text.as_str());
+        let (ast, diags) = skill_compiler::syntax::parse(&source, 0);
+        if diags.is_empty() {
+            let formatted = skill_compiler::fmt::format(&source, &ast);
+            let (_, again) =
+                skill_compiler::syntax::parse(&skill_compiler::SourceFile::new("f.skill", formatted.as_str()), 0);
+            assert!(again.is_empty(), "`{value}` formatted: {again:?}\n{formatted}");
+        }
+    }
+}

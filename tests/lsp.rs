@@ -858,6 +858,11 @@ fn a_parameter_inside_arithmetic_is_found_hovered_and_renamed() {
         other => format!("{other:?}"),
     };
     assert!(hover.contains("2 s"), "the default is shown: {hover}");
+    let watch = match engine.hover(name, here("watch force", 1)).map(|h| h.contents) {
+        Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
+        other => format!("{other:?}"),
+    };
+    assert!(watch.contains("expects no contact"), "hover on `watch`: {watch}");
     let edit = engine.rename(name, declared, "margin").expect("renames");
     let edits: usize = edit.changes.iter().flat_map(|c| c.values()).map(Vec::len).sum();
     assert_eq!(edits, 3);

@@ -224,13 +224,13 @@ pub enum StmtKind {
     Capture {
         /// The name it is kept under.
         name: Ident,
-        /// `once`: later entries keep the first capture.
-        once: bool,
+        /// `once` (where it is written): later entries keep the first capture.
+        once: Option<Span>,
     },
     /// `on GUARD -> TARGET`, `on watch GUARD -> TARGET`.
     Transition {
-        /// `watch`: the guard watches for a limit and expects no contact.
-        watch: bool,
+        /// `watch` (where it is written): the guard watches for a limit and expects no contact.
+        watch: Option<Span>,
         /// The guard.
         guard: Guard,
         /// Where it goes.

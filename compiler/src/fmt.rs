@@ -356,8 +356,8 @@ fn statement(stmt: &StmtKind) -> String {
             None => format!("lift off {}", expr(distance)),
         },
         StmtKind::Repeat(count) => format!("repeat {}", expr(count)),
-        StmtKind::Capture { name, once: false } => format!("capture {}", name.name),
-        StmtKind::Capture { name, once: true } => format!("capture {} once", name.name),
+        StmtKind::Capture { name, once: None } => format!("capture {}", name.name),
+        StmtKind::Capture { name, once: Some(_) } => format!("capture {} once", name.name),
         StmtKind::Transition {
             watch,
             guard: g,
@@ -376,7 +376,7 @@ fn statement(stmt: &StmtKind) -> String {
                     then.name
                 ),
             };
-            let watch = if *watch { "watch " } else { "" };
+            let watch = if watch.is_some() { "watch " } else { "" };
             format!("on {watch}{} -> {target}", guard(g))
         }
     }

@@ -646,14 +646,14 @@ fn stmt(pair: Pair<'_, Rule>) -> Stmt {
             let _keyword = inner.next().expect("grammar: capture keyword");
             StmtKind::Capture {
                 name: ident(inner.next().expect("grammar: capture names a pose")),
-                once: inner.next().is_some(),
+                once: inner.next().map(|pair| span_of(&pair)),
             }
         }
         Rule::transition => {
-            let watch = inner.peek().is_some_and(|pair| pair.as_rule() == Rule::watch_kw);
-            if watch {
-                inner.next();
-            }
+            let watch = match inner.peek() {
+                Some(pair) if pair.as_rule() == Rule::watch_kw => inner.next().map(|pair| span_of(&pair)),
+                _ => None,
+            };
             let guard_pair = inner.next().expect("grammar: transition has a guard");
             let target_pair = inner.next().expect("grammar: transition has a target");
             StmtKind::Transition {

@@ -119,6 +119,14 @@ pub fn describe(analysis: &Analysis, occurrence: &Occurrence) -> Option<String> 
             };
             let _ = writeln!(out, "```skill\n{name}\n```\nGuard: {meaning}.");
         }
+        What::Keyword(word) => {
+            let meaning = match *word {
+                "watch" => "the guard watches for a limit (a safety stop) and expects no contact: it fires as any guard, but a force in it does not slow the state's motion as an approach to a contact would",
+                "once" => "the capture is taken at the first entry only: while the name holds no pose yet; a loop's later passes keep it",
+                _ => return None,
+            };
+            let _ = writeln!(out, "```skill\n{word}\n```\n{meaning}.");
+        }
         What::BuiltinFrame(name) => {
             let meaning = if name == "base" {
                 "the robot base frame"

@@ -97,6 +97,8 @@ pub enum What {
     Import(Option<usize>),
     /// A task step's own argument: `demo`, `force_scale`, ...
     StepArg(String),
+    /// A word that changes a statement's meaning: `watch`, `once`.
+    Keyword(&'static str),
 }
 
 /// A place a name is written.
@@ -553,8 +555,15 @@ impl SkillWalk<'_> {
                 }
             }
             StmtKind::Repeat(count) => self.value(count),
-            StmtKind::Capture { .. } => {}
-            StmtKind::Transition { guard, target, .. } => {
+            StmtKind::Capture { once, .. } => {
+                if let Some(span) = once {
+                    self.index.note(self.file, *span, What::Keyword("once"));
+                }
+            }
+            StmtKind::Transition { guard, target, watch } => {
+                if let Some(span) = watch {
+                    self.index.note(self.file, *span, What::Keyword("watch"));
+                }
                 self.guard(guard);
                 match target {
                     Target::State(name) => self.refer(name, &[Kind::State, Kind::Terminal]),

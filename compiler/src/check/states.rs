@@ -251,7 +251,7 @@ impl Checker<'_> {
                 }
                 StmtKind::Capture { name, once } => {
                     capture = Some(name.name.clone());
-                    capture_once = *once;
+                    capture_once = once.is_some();
                 }
                 StmtKind::Control {
                     groups,
@@ -310,7 +310,7 @@ impl Checker<'_> {
                                 .split_whitespace()
                                 .collect::<Vec<_>>()
                                 .join(" "),
-                            watch: *watch,
+                            watch: watch.is_some(),
                             span: self.ir_span(stmt.span),
                         };
                         state_transitions.push((transition, guard, stmt.span));
@@ -371,7 +371,7 @@ impl Checker<'_> {
             let lifts = lift_off.is_some_and(|spec| spec.distance_m > 0.0);
             let approaches = approach_span.is_some()
                 || stmts.iter().any(|stmt| match &stmt.kind {
-                    StmtKind::Transition { guard, watch, .. } => !watch && mentions_force(guard),
+                    StmtKind::Transition { guard, watch, .. } => watch.is_none() && mentions_force(guard),
                     _ => false,
                 });
             self.lift_off_use(state, span, writes_move, lifts && (has_force_axes || approaches));
@@ -473,7 +473,7 @@ impl Checker<'_> {
         }
         // A `watch` guard expects no contact: an approach is slowed for guards that do.
         let watches_force = stmts.iter().any(|stmt| match &stmt.kind {
-            StmtKind::Transition { guard, watch, .. } => !watch && mentions_force(guard),
+            StmtKind::Transition { guard, watch, .. } => watch.is_none() && mentions_force(guard),
             _ => false,
         });
         if !watches_force {

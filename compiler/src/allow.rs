@@ -9,6 +9,7 @@
 
 use crate::diag::{Code, Diag, Severity};
 use crate::source::{SourceFile, Span};
+use std::collections::HashMap;
 
 /// One `// allow(NAME): REASON` comment.
 struct Allow {
@@ -89,65 +90,45 @@ fn line_starts(text: &str) -> Vec<usize> {
         .collect()
 }
 
-/// The allows of a file's text, each with the line it applies to.
+/// The allows of a file's text, each with the line it applies to. The comments are the
+/// formatter's ([`crate::fmt::line_comments`]: `//` outside strings, doc comments left out).
 fn allows_in(text: &str) -> Vec<Allow> {
-    let mut allows = Vec::new();
-    let mut offset = 0;
+    let starts = line_starts(text);
+    let line_of = |offset: usize| starts.partition_point(|&start| start <= offset).saturating_sub(1);
+    let comments = crate::fmt::line_comments(text);
+    let comment_on: HashMap<usize, usize> = comments.iter().map(|c| (line_of(c.span.start), c.span.start)).collect();
     let lines: Vec<&str> = text.split('\n').collect();
-    for (number, line) in lines.iter().enumerate() {
-        if let Some(at) = comment_start(line) {
-            let comment = &line[at..];
-            let body = comment.trim_start_matches('/').trim_start();
-            if !comment.starts_with("///") {
-                if let Some(rest) = body.strip_prefix("allow(") {
-                    if let Some(close) = rest.find(')') {
-                        let name = rest[..close].trim().to_string();
-                        let reason = rest[close + 1..]
-                            .trim_start()
-                            .strip_prefix(':')
-                            .unwrap_or("")
-                            .trim()
-                            .to_string();
-                        let code_before = !line[..at].trim().is_empty();
-                        // Alone on its line, it is about the next line with code on it.
-                        let target = if code_before {
-                            Some(number)
-                        } else {
-                            (number + 1..lines.len()).find(|&next| {
-                                let code = comment_start(lines[next]).map_or(lines[next], |c| &lines[next][..c]);
-                                !code.trim().is_empty()
-                            })
-                        };
-                        allows.push(Allow {
-                            span: Span::new(offset + at, offset + line.trim_end().len()),
-                            name,
-                            reason,
-                            line: target.unwrap_or(number),
-                        });
-                    }
-                }
-            }
-        }
-        offset += line.len() + 1;
+    // Whether line `n` holds code: text before its comment, if any, that is not a doc comment.
+    let has_code = |n: usize| {
+        let end = comment_on.get(&n).map_or(lines[n].len(), |&at| at - starts[n]);
+        let code = lines[n][..end].trim();
+        !code.is_empty() && !code.starts_with("///")
+    };
+    let mut allows = Vec::new();
+    for comment in &comments {
+        let body = comment.text.trim_start_matches('/').trim_start();
+        let Some(rest) = body.strip_prefix("allow(") else {
+            continue;
+        };
+        let Some(close) = rest.find(')') else {
+            continue;
+        };
+        let reason = rest[close + 1..].trim_start().strip_prefix(':').unwrap_or("").trim();
+        let number = line_of(comment.span.start);
+        // Alone on its line, it is about the next line with code on it.
+        let target = if comment.trailing {
+            Some(number)
+        } else {
+            (number + 1..lines.len()).find(|&next| has_code(next))
+        };
+        allows.push(Allow {
+            span: comment.span,
+            name: rest[..close].trim().to_string(),
+            reason: reason.to_string(),
+            line: target.unwrap_or(number),
+        });
     }
     allows
-}
-
-/// Where a line comment starts on `line`, outside strings.
-fn comment_start(line: &str) -> Option<usize> {
-    let bytes = line.as_bytes();
-    let mut in_string = false;
-    let mut at = 0;
-    while at < bytes.len() {
-        match bytes[at] {
-            b'\\' if in_string => at += 1,
-            b'"' => in_string = !in_string,
-            b'/' if !in_string && bytes.get(at + 1) == Some(&b'/') => return Some(at),
-            _ => {}
-        }
-        at += 1;
-    }
-    None
 }
 
 #[cfg(test)]

@@ -8,10 +8,13 @@ const INDENT: &str = "    ";
 
 /// A line comment of the source, with whether code precedes it on its line.
 #[derive(Debug, Clone)]
-struct Comment {
-    span: Span,
-    text: String,
-    trailing: bool,
+pub(crate) struct Comment {
+    /// From its `//` to the end of its line, trailing whitespace left out.
+    pub(crate) span: Span,
+    /// The comment's text, `//` included.
+    pub(crate) text: String,
+    /// Whether code stands before it on its line.
+    pub(crate) trailing: bool,
 }
 
 /// Formats a parsed file. `src` must be the text `file` was parsed from.
@@ -530,7 +533,7 @@ fn quote(text: &str) -> String {
 }
 
 /// Finds every `//` comment (not `///` doc comments) outside strings.
-fn line_comments(text: &str) -> Vec<Comment> {
+pub(crate) fn line_comments(text: &str) -> Vec<Comment> {
     let mut comments = Vec::new();
     let mut line_start = 0;
     for line in text.split_inclusive('\n') {

@@ -212,11 +212,17 @@ pub fn compile_with_params(
             }
             continue;
         }
+        let mut found = Vec::new();
+        let lowered = check::Checker::new(file, &files[file], &mut found).skill_with(skill, &settings, true);
+        if lowered.is_some() {
+            // No error: nothing to attribute to the flags.
+            diags.extend(found);
+            skills.extend(lowered);
+            continue;
+        }
         // An error the defaults do not have is the command line's: say which flags.
         let mut with_defaults = Vec::new();
         check::Checker::new(file, &files[file], &mut with_defaults).skill_with(skill, &[], false);
-        let mut found = Vec::new();
-        let lowered = check::Checker::new(file, &files[file], &mut found).skill_with(skill, &settings, true);
         let flags = settings
             .iter()
             .map(|setting| format!("`--param {}`", files[setting.file].text))
@@ -228,18 +234,12 @@ pub fn compile_with_params(
                 && !with_defaults
                     .iter()
                     .any(|d| d.code == diag.code && d.span() == diag.span() && d.message == diag.message);
-            if caused {
-                let note = format!("with {flags} from the command line");
-                let help = match &diag.help {
-                    Some(help) => format!("{help} ({note})"),
-                    None => note,
-                };
-                diags.push(diag.help(help));
+            diags.push(if caused {
+                noted(diag, &format!("with {flags} from the command line"))
             } else {
-                diags.push(diag);
-            }
+                diag
+            });
         }
-        skills.extend(lowered);
     }
     let mut tasks = Vec::new();
     {
@@ -266,12 +266,7 @@ pub fn compile_with_params(
                     check::Checker::new(file, &files[file], &mut scratch).skill_with(skill, &settings, false);
                 // Warnings were given by the skill's own check; errors are this step's values'.
                 for diag in scratch.into_iter().filter(|d| d.severity() == Severity::Error) {
-                    let note = format!("with the parameters step `{step_name}` sets");
-                    let help = match &diag.help {
-                        Some(help) => format!("{help} ({note})"),
-                        None => note,
-                    };
-                    diags.push(diag.help(help));
+                    diags.push(noted(diag, &format!("with the parameters step `{step_name}` sets")));
                 }
                 match (specialised, lowered.as_mut(), step.index) {
                     (Some(skill_ir), Some(task_ir), Some(index)) => {
@@ -311,6 +306,16 @@ pub fn compile_with_params(
         program,
         allowed,
     }
+}
+
+/// `diag` with `note` after its help, in parentheses (or as its help when it has none): what
+/// caused it, when the cause is not in the file it points into.
+fn noted(diag: Diag, note: &str) -> Diag {
+    let help = match &diag.help {
+        Some(help) => format!("{help} ({note})"),
+        None => note.to_string(),
+    };
+    diag.help(help)
 }
 
 /// Parses `--param` settings, each into a file of its own named [`PARAM_FILE`] (so that a

@@ -194,21 +194,6 @@ fn a_motion_at_a_pose_not_yet_captured_fails_naming_the_capture() {
     assert_eq!(report.visits.last().map(|visit| visit.state.as_str()), Some("again"));
 }
 
-/// `touch_capture.skill` with its `again` ending at `found` moved by `offset`.
-fn with_offset(offset: &str) -> skill_ir::Skill {
-    let text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
-    let text = text.replace(
-        "move approach at found\n",
-        &format!("move approach at found + {offset}\n"),
-    );
-    assert!(text.contains(offset));
-    let compiled = skill_compiler::compile_str("touch_capture.skill", &text);
-    let Some(program) = compiled.program else {
-        panic!("{offset}: {:?}", compiled.diags)
-    };
-    program.skills.into_iter().next().expect("one skill")
-}
-
 #[test]
 fn a_motion_at_a_capture_with_an_offset_ends_where_the_offset_says() {
     let (skill, learned) = learn();
@@ -223,7 +208,10 @@ fn a_motion_at_a_capture_with_an_offset_ends_where_the_offset_says() {
         ("[0 mm, 0 mm, -1 cm] in contact", [0.0, 0.0, 0.01]),
         ("[2 * 10 mm, 0 mm, 5 mm] in base", [0.02, 0.0, 0.005]),
     ] {
-        let moved = with_offset(offset);
+        let moved = variant(&[(
+            "move approach at found\n",
+            &format!("move approach at found + {offset}\n"),
+        )]);
         let (report, log) = run(&moved, &learned, &["table.z=0.225"]);
         assert_eq!(
             report.outcome,
@@ -252,13 +240,17 @@ fn a_motion_at_a_capture_with_an_offset_ends_where_the_offset_says() {
     }
 }
 
-/// `touch_capture.skill` with `from` replaced by `to`, compiled.
-fn variant(from: &str, to: &str) -> skill_ir::Skill {
-    let text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
-    assert!(text.contains(from), "`{from}` is in the skill");
-    let compiled = skill_compiler::compile_str("touch_capture.skill", &text.replacen(from, to, 1));
+/// `touch_capture.skill` with each `(from, to)` of `edits` made (the first `from` replaced by
+/// its `to`), compiled.
+fn variant(edits: &[(&str, &str)]) -> skill_ir::Skill {
+    let mut text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
+    for (from, to) in edits {
+        assert!(text.contains(from), "`{from}` is in the skill");
+        text = text.replacen(from, to, 1);
+    }
+    let compiled = skill_compiler::compile_str("touch_capture.skill", &text);
     let Some(program) = compiled.program else {
-        panic!("{to}: {:?}", compiled.diags)
+        panic!("{edits:?}: {:?}", compiled.diags)
     };
     program.skills.into_iter().next().expect("one skill")
 }
@@ -280,10 +272,10 @@ fn a_watching_force_guard_does_not_slow_the_motion_as_an_expected_contact_does()
         "on force_magnitude >= 60 N -> stuck",
         "on watch force_magnitude >= 60 N -> stuck",
     ] {
-        let guarded = variant(
+        let guarded = variant(&[(
             "        on motion_done -> done\n",
             &format!("        {guard}\n        on motion_done -> done\n"),
-        );
+        )]);
         let (report, log) = run(&guarded, &learned, &[]);
         assert_eq!(
             report.outcome,
@@ -310,29 +302,20 @@ fn a_capture_once_keeps_the_first_pass_of_a_loop() {
     // (first at the start pose, then where `again` ended, on the table); `home` ends 2 cm above
     // `start` (clear of the table when `start` is the second pass's).
     let looped = |capture: &str| {
-        let text = std::fs::read_to_string(root().join("tests/data/touch_capture.skill")).expect("readable");
-        let text = text
-            .replacen(
+        let skill = variant(&[
+            (
                 "        move approach from current\n",
                 &format!("        {capture}\n        move approach from current\n"),
-                1,
-            )
-            .replacen(
+            ),
+            (
                 "        move approach at found\n        control position all in contact\n        stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done -> done\n",
                 "        move approach at found\n        control position all in contact\n        stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done and entered(again) >= 2 -> home\n        on motion_done -> approach\n",
-                1,
-            )
-            .replacen(
+            ),
+            (
                 "    terminal done: success\n",
                 "    state home {\n        move retreat at start + [0 mm, 0 mm, 2 cm]\n        control position all in contact\n        stiffness x y z: 2000 N/m, rx ry rz: 150 Nm/rad\n        on motion_done -> done\n        on timeout 30 s -> stuck\n    }\n\n    terminal done: success\n",
-                1,
-            );
-        assert!(text.contains("state home") && text.contains("-> home") && text.contains(capture));
-        let compiled = skill_compiler::compile_str("touch_capture.skill", &text);
-        let Some(program) = compiled.program else {
-            panic!("{capture}: {:?}", compiled.diags)
-        };
-        let skill = program.skills.into_iter().next().expect("one skill");
+            ),
+        ]);
         let (report, log) = run(&skill, &learned, &[]);
         assert_eq!(
             report.outcome,
@@ -370,10 +353,10 @@ fn a_capture_once_keeps_the_first_pass_of_a_loop() {
 fn a_moved_since_guard_measures_from_the_capture() {
     let (_, learned) = learn();
     // `again` runs back to the found point; leaving it once within 2 cm of it ends it early.
-    let guarded = variant(
+    let guarded = variant(&[(
         "        on motion_done -> done\n",
         "        on moved since found <= 2 cm -> done\n        on motion_done -> done\n",
-    );
+    )]);
     let (report, log) = run(&guarded, &learned, &["table.z=0.225"]);
     assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
     let found = entered(&report, "settle");

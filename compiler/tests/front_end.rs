@@ -715,18 +715,7 @@ fn a_nul_is_named_anywhere_and_a_utf16_file_is_recognised() {
 fn a_hold_longer_than_a_later_timeout_is_refused_also_when_a_parameter_sets_it() {
     let text = with_state("move q on force(c.z) < t for hold -> d on timeout 4 s -> d")
         .replace("skill s {", "skill s { param hold = 2 s");
-    let compile = |params: &[&str]| {
-        let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-        skill_compiler::compile_with_params(
-            skill_compiler::SourceFile::new("p.skill", text.as_str()),
-            &params,
-            &mut |_| {
-                Err(LoadError {
-                    reason: "no imports".to_string(),
-                })
-            },
-        )
-    };
+    let compile = |params: &[&str]| compile_with(&text, params);
     assert_eq!(compile(&[]).diags, Vec::new());
     let refused = compile(&["hold=5s"]);
     assert_eq!(
@@ -780,17 +769,18 @@ fn a_zero_timeout_warns_only_where_a_motion_or_force_would_be_cut() {
 /// A skill whose dwell is computed from its parameter: `hold - 3 s`.
 const COMPUTED_DWELL: &str = "skill s {\n    param hold = 5 s\n    param passes = 2\n    learn {\n        segments = max_force\n        motion m = dmp(segment 1)\n    }\n    state a {\n        move m\n        repeat passes\n        on dwell hold - 3 s -> d\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
 
-fn with_params(params: &[&str]) -> skill_compiler::Compilation {
+/// `text` (importing nothing) compiled with `--param` settings `params`.
+fn compile_with(text: &str, params: &[&str]) -> Compilation {
     let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-    skill_compiler::compile_with_params(
-        skill_compiler::SourceFile::new("s.skill", COMPUTED_DWELL),
-        &params,
-        &mut |_path| {
-            Err(LoadError {
-                reason: "no imports here".into(),
-            })
-        },
-    )
+    skill_compiler::compile_with_params(skill_compiler::SourceFile::new("s.skill", text), &params, &mut |_| {
+        Err(LoadError {
+            reason: "no imports here".into(),
+        })
+    })
+}
+
+fn with_params(params: &[&str]) -> Compilation {
+    compile_with(COMPUTED_DWELL, params)
 }
 
 #[test]
@@ -874,18 +864,7 @@ fn an_offset_from_a_capture_is_three_lengths_in_a_known_frame() {
 #[test]
 fn a_vector_parameter_is_an_offset_a_step_or_flag_may_set() {
     const TEXT: &str = "skill s {\n    /// Where to end, from the found point.\n    param lift = [0 mm, 0 mm, 5 mm]\n    learn {\n        motion m = dmp(segment 1)\n    }\n    state a {\n        capture found\n        move m from current\n        on motion_done -> b\n    }\n    state b {\n        move m at found + lift in tool\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
-    let compile = |params: &[&str]| {
-        let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-        skill_compiler::compile_with_params(
-            skill_compiler::SourceFile::new("s.skill", TEXT),
-            &params,
-            &mut |_path| {
-                Err(LoadError {
-                    reason: "no imports here".into(),
-                })
-            },
-        )
-    };
+    let compile = |params: &[&str]| compile_with(TEXT, params);
     let offset_of = |compiled: &Compilation| {
         let program = compiled
             .program

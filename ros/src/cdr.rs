@@ -75,6 +75,23 @@ impl CdrWriter {
         self.buf.extend_from_slice(&value.to_le_bytes());
     }
 
+    /// A `float32`.
+    pub fn f32(&mut self, value: f32) {
+        self.align(4);
+        self.buf.extend_from_slice(&value.to_le_bytes());
+    }
+
+    /// A `bool`: one byte, 0 or 1.
+    pub fn bool(&mut self, value: bool) {
+        self.buf.push(u8::from(value));
+    }
+
+    /// A `uint8[]`.
+    pub fn bytes(&mut self, values: &[u8]) {
+        self.u32(u32::try_from(values.len()).unwrap_or(u32::MAX));
+        self.buf.extend_from_slice(values);
+    }
+
     /// A `string` (length with the NUL, bytes, NUL). Interior NULs are dropped: CDR cannot carry them.
     pub fn string(&mut self, value: &str) {
         let bytes: Vec<u8> = value.bytes().filter(|b| *b != 0).collect();
@@ -148,6 +165,11 @@ impl<'a> CdrReader<'a> {
         }
     }
 
+    /// Where the next field is read, counted from the start of the message.
+    pub fn offset(&self) -> usize {
+        self.pos
+    }
+
     /// Bytes left after the current position.
     pub fn remaining(&self) -> usize {
         self.data.len().saturating_sub(self.pos)
@@ -200,6 +222,37 @@ impl<'a> CdrReader<'a> {
         } else {
             f64::from_be_bytes(bytes)
         })
+    }
+
+    /// A `float32`.
+    pub fn f32(&mut self, what: &str) -> Result<f32, CdrError> {
+        let bytes = self.take::<4>(what)?;
+        Ok(if self.little_endian {
+            f32::from_le_bytes(bytes)
+        } else {
+            f32::from_be_bytes(bytes)
+        })
+    }
+
+    /// A `bool`: a byte that must be 0 or 1.
+    pub fn bool(&mut self, what: &str) -> Result<bool, CdrError> {
+        let start = self.pos;
+        match self.take::<1>(what)? {
+            [0] => Ok(false),
+            [1] => Ok(true),
+            [other] => Err(CdrError {
+                offset: start,
+                reason: format!("{what} is a bool, 0 or 1, not {other}: the message is not of this type or is corrupt"),
+            }),
+        }
+    }
+
+    /// A `uint8[]`.
+    pub fn bytes(&mut self, what: &str) -> Result<Vec<u8>, CdrError> {
+        let count = self.count(what, 1)?;
+        let out = self.data[self.pos..self.pos + count].to_vec();
+        self.pos += count;
+        Ok(out)
     }
 
     /// A `string`: its length (with the NUL) must fit in the bytes left, its last byte must be

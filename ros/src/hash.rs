@@ -101,7 +101,11 @@ fn referenced(fields: &str, into: &mut BTreeSet<String>) {
 
 /// The JSON text REP 2011 hashes for `ty`.
 pub fn type_description_json(ty: MsgType) -> String {
-    let own = ty.own_fields();
+    description_json(ty.schema_name(), ty.own_fields())
+}
+
+/// The JSON text REP 2011 hashes for the type `type_name` with fields `own`.
+fn description_json(type_name: &str, own: &str) -> String {
     let mut refs = BTreeSet::new();
     referenced(own, &mut refs);
     // Sorted by their full names, as rosidl sorts them (`pkg/msg/Type`; the same order as the
@@ -110,7 +114,7 @@ pub fn type_description_json(ty: MsgType) -> String {
     refs.sort_by_key(|name| full_name(name));
     let mut out = String::with_capacity(2048);
     out.push_str("{\"type_description\": ");
-    describe(&mut out, ty.schema_name(), own);
+    describe(&mut out, type_name, own);
     out.push_str(", \"referenced_type_descriptions\": [");
     for (index, name) in refs.iter().enumerate() {
         if index > 0 {
@@ -124,7 +128,11 @@ pub fn type_description_json(ty: MsgType) -> String {
 
 /// The type hash as ROS 2 writes it: `RIHS01_` and the SHA-256 of the description in hex.
 pub fn type_hash(ty: MsgType) -> String {
-    let digest = Sha256::digest(type_description_json(ty).as_bytes());
+    hash_of(&type_description_json(ty))
+}
+
+fn hash_of(description: &str) -> String {
+    let digest = Sha256::digest(description.as_bytes());
     let mut out = String::from("RIHS01_");
     for byte in digest {
         let _ = write!(out, "{byte:02x}");
@@ -161,6 +169,18 @@ mod tests {
                 type_description_json(ty)
             );
         }
+    }
+
+    /// `visualization_msgs/Marker`'s hash as the generated `rosidl` code of a release with the
+    /// texture and mesh-file fields carries it: the marker's field list (order, types, nested
+    /// types) is the one ROS 2 builds, or a viewer would misread every field after a mistake.
+    #[test]
+    fn the_marker_hashes_as_ros_2_builds_it() {
+        let marker = "visualization_msgs/Marker";
+        assert_eq!(
+            hash_of(&description_json(marker, fields_of(marker))),
+            "RIHS01_45b13ccf791f225962bf74e746f9644518855d783a6f42ba0cc14fde2b4f3ce0"
+        );
     }
 
     #[test]

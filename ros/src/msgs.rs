@@ -104,6 +104,8 @@ pub enum MsgType {
     String,
     /// `std_msgs/msg/Float64MultiArray`.
     Float64MultiArray,
+    /// `visualization_msgs/msg/MarkerArray`.
+    MarkerArray,
 }
 
 impl MsgType {
@@ -116,6 +118,7 @@ impl MsgType {
             MsgType::JointState => "sensor_msgs/msg/JointState",
             MsgType::String => "std_msgs/msg/String",
             MsgType::Float64MultiArray => "std_msgs/msg/Float64MultiArray",
+            MsgType::MarkerArray => "visualization_msgs/msg/MarkerArray",
         }
     }
 
@@ -129,6 +132,7 @@ impl MsgType {
             MsgType::JointState,
             MsgType::String,
             MsgType::Float64MultiArray,
+            MsgType::MarkerArray,
         ]
         .into_iter()
         .find(|ty| ty.schema_name().replace("/msg/", "/") == short)
@@ -144,6 +148,7 @@ impl MsgType {
             MsgType::JointState => &["header", "name", "position", "velocity", "effort"],
             MsgType::String => &["data"],
             MsgType::Float64MultiArray => &["layout", "data"],
+            MsgType::MarkerArray => &["markers"],
         }
     }
 
@@ -158,6 +163,7 @@ impl MsgType {
             }
             MsgType::String => "string data\n",
             MsgType::Float64MultiArray => "std_msgs/MultiArrayLayout layout\nfloat64[] data\n",
+            MsgType::MarkerArray => "visualization_msgs/Marker[] markers\n",
         }
     }
 
@@ -251,6 +257,25 @@ const KNOWN_TYPES: &[(&str, &str)] = &[
         "std_msgs/MultiArrayDimension",
         "string label\nuint32 size\nuint32 stride\n",
     ),
+    // Jazzy's marker, with the texture and embedded-mesh fields it gained after Humble (written
+    // empty here: they are for textured and embedded meshes, which skillc does not draw).
+    (
+        "visualization_msgs/Marker",
+        "std_msgs/Header header\nstring ns\nint32 id\nint32 type\nint32 action\ngeometry_msgs/Pose pose\n\
+         geometry_msgs/Vector3 scale\nstd_msgs/ColorRGBA color\nbuiltin_interfaces/Duration lifetime\n\
+         bool frame_locked\ngeometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\n\
+         string texture_resource\nsensor_msgs/CompressedImage texture\n\
+         visualization_msgs/UVCoordinate[] uv_coordinates\nstring text\nstring mesh_resource\n\
+         visualization_msgs/MeshFile mesh_file\nbool mesh_use_embedded_materials\n",
+    ),
+    ("std_msgs/ColorRGBA", "float32 r\nfloat32 g\nfloat32 b\nfloat32 a\n"),
+    ("builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n"),
+    (
+        "sensor_msgs/CompressedImage",
+        "std_msgs/Header header\nstring format\nuint8[] data\n",
+    ),
+    ("visualization_msgs/UVCoordinate", "float32 u\nfloat32 v\n"),
+    ("visualization_msgs/MeshFile", "string filename\nuint8[] data\n"),
 ];
 
 /// The fields of a type the definitions use.
@@ -483,6 +508,212 @@ impl Float64MultiArray {
     }
 }
 
+/// `visualization_msgs/Marker`'s shape types skillc writes (the message's `type` constants).
+pub mod marker_type {
+    /// An arrow from `points[0]` to `points[1]` (scale: shaft diameter, head diameter, head length).
+    pub const ARROW: i32 = 0;
+    /// A box of extents `scale` centred on the pose.
+    pub const CUBE: i32 = 1;
+    /// An ellipsoid of diameters `scale`.
+    pub const SPHERE: i32 = 2;
+    /// A cylinder along the pose's z: diameters `scale.x`, `scale.y`, height `scale.z`.
+    pub const CYLINDER: i32 = 3;
+    /// Connected line segments through `points` (scale.x: line width).
+    pub const LINE_STRIP: i32 = 4;
+    /// Text at the pose, facing the viewer (scale.z: letter height).
+    pub const TEXT_VIEW_FACING: i32 = 9;
+}
+
+/// `visualization_msgs/Marker`'s `action` constants.
+pub mod marker_action {
+    /// Add or replace the marker `(ns, id)`.
+    pub const ADD: i32 = 0;
+    /// Remove the marker `(ns, id)`.
+    pub const DELETE: i32 = 2;
+}
+
+/// `visualization_msgs/Marker`: one shape a 3-D viewer draws. The fields skillc does not use
+/// (per-point colours, textures, embedded meshes) are written empty and must be empty when read.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Marker {
+    /// Stamp and the frame the pose is in.
+    pub header: Header,
+    /// Namespace: with `id`, what names the marker.
+    pub ns: String,
+    /// Its number in the namespace.
+    pub id: i32,
+    /// One of [`marker_type`] (the message's `type`).
+    pub shape: i32,
+    /// One of [`marker_action`].
+    pub action: i32,
+    /// Position of the pose \[m\].
+    pub position: [f64; 3],
+    /// Orientation of the pose `[x, y, z, w]`.
+    pub orientation_xyzw: [f64; 4],
+    /// Size, as the shape reads it \[m\].
+    pub scale: [f64; 3],
+    /// Colour `[r, g, b, a]`, each 0 to 1.
+    pub color_rgba: [f32; 4],
+    /// How long a viewer shows it (zero: until replaced).
+    pub lifetime: Time,
+    /// Whether it moves with its frame after it is drawn.
+    pub frame_locked: bool,
+    /// Points of an arrow or a line \[m\].
+    pub points: Vec<[f64; 3]>,
+    /// A text marker's text.
+    pub text: String,
+}
+
+/// Smallest CDR size of one `Marker` (every string empty, every sequence empty).
+const MIN_MARKER_BYTES: usize = 100;
+
+fn write_marker(writer: &mut CdrWriter, marker: &Marker) {
+    write_header(writer, &marker.header);
+    writer.string(&marker.ns);
+    writer.i32(marker.id);
+    writer.i32(marker.shape);
+    writer.i32(marker.action);
+    write_f64s(writer, &marker.position);
+    write_f64s(writer, &marker.orientation_xyzw);
+    write_f64s(writer, &marker.scale);
+    for channel in marker.color_rgba {
+        writer.f32(channel);
+    }
+    writer.i32(marker.lifetime.sec);
+    writer.u32(marker.lifetime.nanosec);
+    writer.bool(marker.frame_locked);
+    writer.u32(u32::try_from(marker.points.len()).unwrap_or(u32::MAX));
+    for point in &marker.points {
+        write_f64s(writer, point);
+    }
+    writer.u32(0); // colors
+    writer.string(""); // texture_resource
+    write_header(writer, &Header::default()); // texture.header
+    writer.string(""); // texture.format
+    writer.bytes(&[]); // texture.data
+    writer.u32(0); // uv_coordinates
+    writer.string(&marker.text);
+    writer.string(""); // mesh_resource
+    writer.string(""); // mesh_file.filename
+    writer.bytes(&[]); // mesh_file.data
+    writer.bool(false); // mesh_use_embedded_materials
+}
+
+/// Reads one of the fields skillc writes empty, and refuses it when it is not.
+fn expect_empty(what: &str, len: usize, offset: usize) -> Result<(), CdrError> {
+    if len == 0 {
+        Ok(())
+    } else {
+        Err(CdrError {
+            offset,
+            reason: format!("marker.{what} holds {len} element(s): skillc reads markers without them"),
+        })
+    }
+}
+
+fn read_marker(reader: &mut CdrReader<'_>) -> Result<Marker, CdrError> {
+    let header = read_header(reader)?;
+    let ns = reader.string("marker.ns")?;
+    let id = reader.i32("marker.id")?;
+    let shape = reader.i32("marker.type")?;
+    let action = reader.i32("marker.action")?;
+    let position = read_f64s(
+        reader,
+        [
+            "marker.pose.position.x",
+            "marker.pose.position.y",
+            "marker.pose.position.z",
+        ],
+    )?;
+    let orientation_xyzw = read_f64s(
+        reader,
+        [
+            "marker.pose.orientation.x",
+            "marker.pose.orientation.y",
+            "marker.pose.orientation.z",
+            "marker.pose.orientation.w",
+        ],
+    )?;
+    let scale = read_f64s(reader, ["marker.scale.x", "marker.scale.y", "marker.scale.z"])?;
+    let mut color_rgba = [0.0f32; 4];
+    for (slot, what) in
+        color_rgba
+            .iter_mut()
+            .zip(["marker.color.r", "marker.color.g", "marker.color.b", "marker.color.a"])
+    {
+        *slot = reader.f32(what)?;
+    }
+    let lifetime = Time {
+        sec: reader.i32("marker.lifetime.sec")?,
+        nanosec: reader.u32("marker.lifetime.nanosec")?,
+    };
+    let frame_locked = reader.bool("marker.frame_locked")?;
+    let count = reader.count("marker.points", 24)?;
+    let mut points = Vec::with_capacity(count);
+    for _ in 0..count {
+        points.push(read_f64s(
+            reader,
+            ["marker.points.x", "marker.points.y", "marker.points.z"],
+        )?);
+    }
+    let at = reader.offset();
+    expect_empty("colors", reader.count("marker.colors", 16)?, at)?;
+    let _texture_resource = reader.string("marker.texture_resource")?;
+    let _texture_header = read_header(reader)?;
+    let _texture_format = reader.string("marker.texture.format")?;
+    let at = reader.offset();
+    expect_empty("texture.data", reader.bytes("marker.texture.data")?.len(), at)?;
+    let at = reader.offset();
+    expect_empty("uv_coordinates", reader.count("marker.uv_coordinates", 8)?, at)?;
+    let text = reader.string("marker.text")?;
+    let _mesh_resource = reader.string("marker.mesh_resource")?;
+    let _mesh_filename = reader.string("marker.mesh_file.filename")?;
+    let at = reader.offset();
+    expect_empty("mesh_file.data", reader.bytes("marker.mesh_file.data")?.len(), at)?;
+    let _embedded = reader.bool("marker.mesh_use_embedded_materials")?;
+    Ok(Marker {
+        header,
+        ns,
+        id,
+        shape,
+        action,
+        position,
+        orientation_xyzw,
+        scale,
+        color_rgba,
+        lifetime,
+        frame_locked,
+        points,
+        text,
+    })
+}
+
+/// `visualization_msgs/MarkerArray`'s CDR bytes.
+pub fn encode_markers(markers: &[Marker]) -> Vec<u8> {
+    let mut writer = CdrWriter::new();
+    writer.u32(u32::try_from(markers.len()).unwrap_or(u32::MAX));
+    for marker in markers {
+        write_marker(&mut writer, marker);
+    }
+    writer.finish()
+}
+
+/// Reads a `visualization_msgs/MarkerArray`.
+pub fn decode_markers(data: &[u8]) -> Result<Vec<Marker>, CdrError> {
+    let mut reader = CdrReader::new(data)?;
+    let count = reader.count("markers", MIN_MARKER_BYTES)?;
+    let mut out = Vec::with_capacity(count);
+    for _ in 0..count {
+        out.push(read_marker(&mut reader)?);
+    }
+    reader.finish(if count == 0 {
+        "markers' length"
+    } else {
+        "marker.mesh_use_embedded_materials"
+    })?;
+    Ok(out)
+}
+
 /// `std_msgs/String`'s CDR bytes.
 pub fn encode_string(text: &str) -> Vec<u8> {
     let mut writer = CdrWriter::new();
@@ -543,6 +774,55 @@ mod tests {
             "00010000050000000600000006000000746f6f6c3000000000000000000000000000f03f000000000000004000000000\
              000008409a9999999999b9bf9a9999999999c9bf333333333333d3bf"
         );
+    }
+
+    /// A marker array as `rosbags` (Python, its ROS 2 Jazzy type store) serialises it, pasted
+    /// from its output: a box, then an arrow with two points and a text. Alignment inside a
+    /// sequence of markers is counted from the message's start, which only a second marker tests.
+    #[test]
+    fn marker_arrays_match_an_independent_implementation() {
+        let marker = |id: i32, shape: i32, points: Vec<[f64; 3]>, text: &str| Marker {
+            header: Header {
+                stamp: Time { sec: 3, nanosec: 5 },
+                frame_id: "base".into(),
+            },
+            ns: "scene".into(),
+            id,
+            shape,
+            action: marker_action::ADD,
+            position: [0.5, -0.25, 0.125],
+            orientation_xyzw: [0.0, 0.0, 0.0, 1.0],
+            scale: [0.3, 0.8, 0.05],
+            color_rgba: [0.5, 0.25, 1.0, 0.75],
+            lifetime: Time::default(),
+            frame_locked: true,
+            points,
+            text: text.into(),
+        };
+        let markers = vec![
+            marker(1, marker_type::CUBE, vec![], ""),
+            marker(7, marker_type::ARROW, vec![[0.5, 0.0, 0.1], [0.5, 0.0, 0.2]], "table"),
+        ];
+        let bytes = encode_markers(&markers);
+        assert_eq!(
+            hex(&bytes),
+            "00010000020000000300000005000000050000006261736500000000060000007363656e650000000100000001000000\
+             00000000000000000000e03f000000000000d0bf000000000000c03f0000000000000000000000000000000000000000\
+             00000000000000000000f03f333333333333d33f9a9999999999e93f9a9999999999a93f0000003f0000803e0000803f\
+             0000403f0000000000000000010000000000000000000000010000000000000000000000000000000100000000000000\
+             010000000000000000000000000000000100000000000000010000000000000001000000000000000000000000000000\
+             0300000005000000050000006261736500000000060000007363656e6500000007000000000000000000000000000000\
+             0000e03f000000000000d0bf000000000000c03f00000000000000000000000000000000000000000000000000000000\
+             0000f03f333333333333d33f9a9999999999e93f9a9999999999a93f0000003f0000803e0000803f0000403f00000000\
+             000000000100000002000000000000000000e03f00000000000000009a9999999999b93f000000000000e03f00000000\
+             000000009a9999999999c93f000000000100000000000000000000000000000001000000000000000100000000000000\
+             0000000000000000060000007461626c65000000010000000000000001000000000000000000000000"
+        );
+        assert_eq!(decode_markers(&bytes), Ok(markers));
+        for cut in 0..bytes.len() - 3 {
+            assert!(decode_markers(&bytes[..cut]).is_err(), "cut at {cut}");
+        }
+        assert!(decode_markers(&encode_string("scene")).is_err());
     }
 
     #[test]
@@ -689,6 +969,7 @@ mod tests {
             MsgType::TfMessage,
             MsgType::JointState,
             MsgType::String,
+            MsgType::MarkerArray,
         ] {
             assert_eq!(definition_fields(&ty.definition()), ty.field_names(), "{ty:?}");
         }

@@ -285,7 +285,7 @@ fn mcap_log(
         (Some(robot), Some(urdf)) => Some(crate::ros::RobotDescription { robot, urdf }),
         _ => None,
     };
-    crate::ros::write_run_log(logs, &names, description.as_ref())
+    crate::ros::write_run_log(logs, &names, description.as_ref(), &scene.spec().objects)
         .map_err(|err| Failure::Usage(format!("cannot write `{}`: {}", path.display(), error_chain(&err))))
 }
 

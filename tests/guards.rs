@@ -53,7 +53,7 @@ fn travel_along_z(log: &RunLog, state: &str) -> f64 {
     let ticks = ticks_in(log, state);
     let (first, last) = (ticks.first().expect("ticks"), ticks.last().expect("ticks"));
     (0..3)
-        .map(|axis| (last.measured[axis] - first.measured[axis]) * last.frame_z[axis])
+        .map(|axis| (last.measured[axis] - first.measured[axis]) * last.frame_z()[axis])
         .sum()
 }
 

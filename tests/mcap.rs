@@ -501,11 +501,14 @@ fn malformed_bags_are_refused_naming_file_topic_and_message() {
 
 /// `/tf` read back with the `mcap` crate's reader (not skillc's bag reader): its tool link's
 /// transform at each stamp equals `/tool_pose` at that stamp within 1e-9; `/robot_description`
-/// is the file's first message and carries the scene's URDF; the latched topics are marked as
+/// is the file's first message and carries the scene's URDF; `/scene` draws the table where the
+/// scene file puts it; `/contact_force`'s measured arrow is `/wrench`'s force from `/tool_pose`,
+/// and its desired arrow stands where the touch presses; the latched topics are marked as
 /// rosbag2 marks them.
 #[test]
 fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
-    use skillc::ros::msgs::decode_tf;
+    use skillc::ros::msgs::{decode_markers, decode_tf, marker_action, marker_type, Marker};
+    use skillc::ros::{FORCE_ARROW_MIN_N, FORCE_ARROW_M_PER_N};
     let dir = temp_dir("tf");
     let log = dir.join("touch.log.mcap");
     let out = skillc(
@@ -527,6 +530,9 @@ fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
     let mut poses = BTreeMap::new();
     let mut transforms = Vec::new();
     let mut description = None;
+    let mut scene_markers: Option<Vec<Marker>> = None;
+    let mut wrenches = BTreeMap::new();
+    let mut arrows = Vec::new();
     for message in mcap::MessageStream::new(&bytes).expect("MCAP") {
         let message = message.expect("message");
         first_topic.get_or_insert_with(|| message.channel.topic.clone());
@@ -545,6 +551,18 @@ fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
                 transforms.push((message.log_time, decode_tf(&message.data).expect("TFMessage")));
             }
             RunLogTopics::TF_STATIC => assert!(latched, "/tf_static is latched"),
+            RunLogTopics::SCENE => {
+                assert!(latched, "/scene is latched");
+                assert!(scene_markers.is_none(), "/scene is written once");
+                scene_markers = Some(decode_markers(&message.data).expect("MarkerArray"));
+            }
+            RunLogTopics::WRENCH => {
+                wrenches.insert(message.log_time, WrenchStamped::decode(&message.data).expect("wrench"));
+            }
+            RunLogTopics::CONTACT_FORCE => {
+                assert!(!latched, "/contact_force is not latched");
+                arrows.push((message.log_time, decode_markers(&message.data).expect("MarkerArray")));
+            }
             RunLogTopics::ROBOT_DESCRIPTION => {
                 assert!(latched, "/robot_description is latched");
                 description = Some(decode_string(&message.data).expect("String"));
@@ -579,5 +597,57 @@ fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
         worst = worst.max(1.0 - dot.abs());
     }
     assert!(worst < 1e-9, "/tf's tool frame is /tool_pose within {worst:e}");
+
+    // The scene: the table box (examples/scenes/table.toml) and its label above its top.
+    let scene = scene_markers.expect("/scene is written");
+    assert_eq!(scene.len(), 2, "{scene:?}");
+    let table = &scene[0];
+    assert_eq!((table.ns.as_str(), table.shape), ("scene", marker_type::CUBE));
+    assert_eq!(table.header.frame_id, "base");
+    assert_eq!(table.position, [0.55, 0.0, 0.275]);
+    assert_eq!(table.scale, [0.6, 0.8, 0.05]);
+    assert_eq!(table.orientation_xyzw, [0.0, 0.0, 0.0, 1.0]);
+    let label = &scene[1];
+    assert_eq!(
+        (label.shape, label.text.as_str()),
+        (marker_type::TEXT_VIEW_FACING, "table")
+    );
+    assert!(label.position[2] > 0.3, "the label stands above the table top");
+
+    // The force arrows, at the /tf rate: the measured one is /wrench's force drawn from the tool
+    // point, and is there exactly when the force is.
+    assert_eq!(arrows.len(), transforms.len());
+    let (mut drawn, mut pressing) = (0, 0);
+    for (stamp, markers) in &arrows {
+        assert_eq!(markers.len(), 2);
+        let (measured, desired) = (&markers[0], &markers[1]);
+        let force = wrenches[stamp].force;
+        let norm = force.iter().map(|f| f * f).sum::<f64>().sqrt();
+        if norm < FORCE_ARROW_MIN_N {
+            assert_eq!(measured.action, marker_action::DELETE);
+        } else {
+            drawn += 1;
+            assert_eq!(
+                (measured.action, measured.shape),
+                (marker_action::ADD, marker_type::ARROW)
+            );
+            let tool = poses[stamp].position;
+            assert_eq!(measured.points[0], tool);
+            for axis in 0..3 {
+                let length = measured.points[1][axis] - tool[axis];
+                assert!((length - FORCE_ARROW_M_PER_N * force[axis]).abs() < 1e-12);
+            }
+        }
+        if desired.action == marker_action::ADD {
+            // The touch presses down on the table: the force that meets it back points up.
+            let up = desired.points[1][2] - desired.points[0][2];
+            assert!(up > 0.0, "the desired arrow points up at {stamp}: {up}");
+            pressing += 1;
+        }
+    }
+    assert!(
+        drawn > 10 && pressing > 10,
+        "{drawn} measured and {pressing} desired arrows drawn"
+    );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }

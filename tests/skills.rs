@@ -226,7 +226,7 @@ fn the_contours_frame_follows_the_moved_drums_normal() {
         let q = nalgebra::Vector3::new(before.measured[0], before.measured[1], before.measured[2]);
         let speed = (p - q).norm() / (tick.t_s - before.t_s);
         let force = nalgebra::Vector3::from_column_slice(&tick.wrench_base[..3]);
-        let z = nalgebra::Vector3::from_column_slice(&tick.frame_z);
+        let z = nalgebra::Vector3::from_column_slice(&tick.frame_z());
         if tick.state != follow || tick.t_s < entered + 0.3 || speed < 0.02 || force.dot(&z) < 2.0 {
             continue;
         }

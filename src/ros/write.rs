@@ -8,7 +8,12 @@ use std::io::Cursor;
 use skill_runtime::demo::{Demo, WrenchFrame};
 use skill_runtime::exec::RunLog;
 
-use super::msgs::{encode_string, Header, JointState, MsgType, PoseStamped, Time, WrenchStamped};
+use skill_runtime::sim::{ObjectShape, ObjectSpec};
+
+use super::msgs::{
+    encode_markers, encode_string, marker_action, marker_type, Header, JointState, Marker, MsgType, PoseStamped, Time,
+    WrenchStamped,
+};
 use super::BagError;
 
 /// The topic a written demonstration's pose goes to (`geometry_msgs/msg/PoseStamped`).
@@ -47,7 +52,23 @@ impl RunLogTopics {
     pub const TF_STATIC: &'static str = "/tf_static";
     /// `std_msgs/msg/String` once, first in the file, latched: the robot's URDF.
     pub const ROBOT_DESCRIPTION: &'static str = "/robot_description";
+    /// `visualization_msgs/msg/MarkerArray` once, latched: the scene's objects as they stand at
+    /// the start (boxes as cubes, cylinders and button caps as cylinders, in frame `base`),
+    /// namespace `scene`, and their names above them, namespace `scene_labels`.
+    pub const SCENE: &'static str = "/scene";
+    /// `visualization_msgs/msg/MarkerArray` every [`TF_PERIOD_TICKS`] ticks: the contact force
+    /// on the tool as arrows from the tool point, [`FORCE_ARROW_M_PER_N`] long per newton
+    /// (namespace `contact_force`): id 0 the measured force (as `/wrench` carries it), id 1 the
+    /// desired one (the force the controller's target applied force meets back, zero on
+    /// position axes). An arrow under [`FORCE_ARROW_MIN_N`] is deleted.
+    pub const CONTACT_FORCE: &'static str = "/contact_force";
 }
+
+/// The length of a force arrow per newton of force \[m/N\]: 10 N draws 5 cm.
+pub const FORCE_ARROW_M_PER_N: f64 = 0.005;
+
+/// A force below this draws no arrow \[N\] (free motion: sensor noise and the tool's inertia).
+pub const FORCE_ARROW_MIN_N: f64 = 0.5;
 
 /// `/tf` is written every this many ticks: 100 Hz at the 1 kHz control rate (every tick would
 /// triple the file for a 3-D view that cannot show more).
@@ -100,7 +121,13 @@ impl Bag {
                 .add_schema(ty.schema_name(), "ros2msg", ty.definition().as_bytes())
                 .map_err(BagError::Write)?;
             let mut metadata = BTreeMap::new();
-            if topic == RunLogTopics::TF_STATIC || topic == RunLogTopics::ROBOT_DESCRIPTION {
+            if [
+                RunLogTopics::TF_STATIC,
+                RunLogTopics::ROBOT_DESCRIPTION,
+                RunLogTopics::SCENE,
+            ]
+            .contains(&topic)
+            {
                 metadata.insert("offered_qos_profiles".to_string(), LATCHED_QOS.to_string());
             }
             let id = writer
@@ -156,6 +183,82 @@ fn pose(t: Time, pose: &[f64; 7]) -> PoseStamped {
     }
 }
 
+/// A marker with the fields every marker here shares filled in.
+fn marker(t: Time, ns: &str, id: usize, shape: i32) -> Marker {
+    Marker {
+        header: header(t, BASE_FRAME),
+        ns: ns.to_owned(),
+        id: i32::try_from(id).unwrap_or(i32::MAX),
+        shape,
+        action: marker_action::ADD,
+        orientation_xyzw: [0.0, 0.0, 0.0, 1.0],
+        ..Marker::default()
+    }
+}
+
+/// The scene's objects as markers, each with its name above it (see [`RunLogTopics::SCENE`]).
+fn scene_markers(t: Time, objects: &BTreeMap<String, ObjectSpec>) -> Vec<Marker> {
+    let mut markers = Vec::with_capacity(2 * objects.len());
+    for (index, (name, object)) in objects.iter().enumerate() {
+        let pose = object.pose();
+        let q = pose.rotation.quaternion();
+        let (shape, scale, color, half_height) = match object.shape() {
+            ObjectShape::Box { size } => (marker_type::CUBE, size, [0.62, 0.62, 0.66, 1.0], size[2] / 2.0),
+            ObjectShape::Cylinder { radius, length } => (
+                marker_type::CYLINDER,
+                [2.0 * radius, 2.0 * radius, length],
+                [0.55, 0.62, 0.75, 1.0],
+                length / 2.0,
+            ),
+            ObjectShape::Button { radius, height, .. } => (
+                marker_type::CYLINDER,
+                [2.0 * radius, 2.0 * radius, height],
+                [0.85, 0.22, 0.2, 1.0],
+                height / 2.0,
+            ),
+        };
+        let mut body = marker(t, "scene", index, shape);
+        body.position = [pose.translation.x, pose.translation.y, pose.translation.z];
+        body.orientation_xyzw = [q.i, q.j, q.k, q.w];
+        body.scale = scale;
+        body.color_rgba = color;
+        markers.push(body);
+        // The label stands 2 cm above the object's top along the world's z (a tilted object's
+        // highest point is not sought: the label only names it).
+        let top = pose * nalgebra::Point3::new(0.0, 0.0, half_height);
+        let mut label = marker(t, "scene_labels", index, marker_type::TEXT_VIEW_FACING);
+        label.position = [top.x, top.y, top.z + 0.02];
+        label.scale = [0.0, 0.0, 0.02];
+        label.color_rgba = [1.0, 1.0, 1.0, 1.0];
+        label.text = name.clone();
+        markers.push(label);
+    }
+    markers
+}
+
+/// The measured and desired force on the tool as arrows from the tool point (see
+/// [`RunLogTopics::CONTACT_FORCE`]).
+fn force_arrows(t: Time, tool: [f64; 3], measured: [f64; 3], desired: [f64; 3]) -> Vec<Marker> {
+    [(measured, [1.0, 0.55, 0.0, 1.0]), (desired, [0.2, 0.8, 0.3, 0.6])]
+        .into_iter()
+        .enumerate()
+        .map(|(id, (force, color))| {
+            let mut arrow = marker(t, "contact_force", id, marker_type::ARROW);
+            let norm = force.iter().map(|f| f * f).sum::<f64>().sqrt();
+            if norm < FORCE_ARROW_MIN_N {
+                arrow.action = marker_action::DELETE;
+                return arrow;
+            }
+            let tip = std::array::from_fn(|axis| tool[axis] + FORCE_ARROW_M_PER_N * force[axis]);
+            arrow.points = vec![tool, tip];
+            // Shaft diameter, head diameter, head length.
+            arrow.scale = [0.003, 0.008, 0.01];
+            arrow.color_rgba = color;
+            arrow
+        })
+        .collect()
+}
+
 /// A demonstration as MCAP: its flange pose on [`DEMO_POSE_TOPIC`] and its wrench on
 /// [`DEMO_WRENCH_TOPIC`], both stamped with the sample times. The wrench's header names frame
 /// `base` or `tool` as `wrench_frame` says, and no frame when it is not known (the reader then
@@ -192,18 +295,22 @@ pub fn write_demo(demo: &Demo, wrench_frame: Option<WrenchFrame>) -> Result<Vec<
 }
 
 /// Consecutive run logs (one, or a task's steps: states written `step/state`) as MCAP on the
-/// [`RunLogTopics`]. `joint_names` name the joints (fewer names than joints: `joint_N`). A log
-/// whose clock starts again is shifted to follow the one before it, so times never go back.
+/// [`RunLogTopics`]. `joint_names` name the joints (fewer names than joints: `joint_N`);
+/// `objects` are the scene's, drawn on `/scene`. A log whose clock starts again is shifted to
+/// follow the one before it, so times never go back.
 pub fn write_run_log(
     logs: &[(Option<&str>, &RunLog)],
     joint_names: &[String],
     description: Option<&RobotDescription<'_>>,
+    objects: &BTreeMap<String, ObjectSpec>,
 ) -> Result<Vec<u8>, BagError> {
     let mut topics = vec![
+        (RunLogTopics::SCENE, MsgType::MarkerArray),
         (RunLogTopics::JOINT_STATES, MsgType::JointState),
         (RunLogTopics::TOOL_POSE, MsgType::PoseStamped),
         (RunLogTopics::DESIRED_POSE, MsgType::PoseStamped),
         (RunLogTopics::WRENCH, MsgType::WrenchStamped),
+        (RunLogTopics::CONTACT_FORCE, MsgType::MarkerArray),
         (RunLogTopics::STATE, MsgType::String),
     ];
     if description.is_some() {
@@ -241,6 +348,11 @@ pub fn write_run_log(
         bag.put(RunLogTopics::TF_STATIC, first_t, &super::msgs::encode_tf(&fixed))?;
         kinematics = Some((robot, data, moving));
     }
+    bag.put(
+        RunLogTopics::SCENE,
+        first_t,
+        &encode_markers(&scene_markers(first_t, objects)),
+    )?;
     let mut tick_index = 0usize;
     let mut offset_s = 0.0;
     let mut last_s = f64::NEG_INFINITY;
@@ -277,8 +389,19 @@ pub fn write_run_log(
                 torque: [-w[3], -w[4], -w[5]],
             };
             bag.put(RunLogTopics::WRENCH, t, &wrench.encode())?;
+            let on_view_tick = tick_index.is_multiple_of(TF_PERIOD_TICKS);
+            if on_view_tick {
+                let desired = tick.desired_force_base();
+                let arrows = force_arrows(
+                    t,
+                    [tick.measured[0], tick.measured[1], tick.measured[2]],
+                    wrench.force,
+                    [-desired[0], -desired[1], -desired[2]],
+                );
+                bag.put(RunLogTopics::CONTACT_FORCE, t, &encode_markers(&arrows))?;
+            }
             if let Some((robot, data, moving_links)) = kinematics.as_mut() {
-                if tick_index.is_multiple_of(TF_PERIOD_TICKS) && dof == robot.dof() {
+                if on_view_tick && dof == robot.dof() {
                     robot.forward_kinematics(data, &tick.joint_state[..dof]);
                     let moving: Vec<_> = moving_links
                         .iter()

@@ -17,14 +17,37 @@ pub struct Tick {
     pub wrench_cf: [f64; 6],
     /// Desired applied wrench in the compliant frame's axes (zero on position axes).
     pub desired_cf: [f64; 6],
-    /// The compliant frame's z axis, base frame.
-    pub frame_z: [f64; 3],
+    /// The compliant frame's orientation in the base frame `[w, x, y, z]` (its z axis is
+    /// [`Tick::frame_z`]).
+    pub frame: [f64; 4],
     /// Position-controlled axes as bits (bit i = axis i of `x y z rx ry rz`).
     pub selection: u8,
     /// Commanded joint torques after limits \[N m\].
     pub torques: JointValues<MAX_INLINE_DOF>,
     /// Joint positions \[rad\] then joint velocities \[rad/s\], as sensed this tick (2 × dof).
     pub joint_state: JointValues<{ 2 * MAX_INLINE_DOF }>,
+}
+
+impl Tick {
+    /// The compliant frame's z axis, base frame.
+    pub fn frame_z(&self) -> [f64; 3] {
+        let [w, x, y, z] = self.frame;
+        // The third column of the rotation matrix of the unit quaternion (w, x, y, z).
+        [
+            2.0 * (x * z + w * y),
+            2.0 * (y * z - w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ]
+    }
+
+    /// The desired applied force in the base frame's axes \[N\] (zero on position axes):
+    /// [`Tick::desired_cf`]'s force turned out of the compliant frame.
+    pub fn desired_force_base(&self) -> [f64; 3] {
+        let [w, x, y, z] = self.frame;
+        let rotation = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z));
+        let f = rotation * nalgebra::Vector3::new(self.desired_cf[0], self.desired_cf[1], self.desired_cf[2]);
+        [f.x, f.y, f.z]
+    }
 }
 
 /// Arms with up to this many joints log a tick without allocating (a longer arm's joint values
@@ -239,7 +262,7 @@ pub fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
                 (&tick.wrench_base[..], 4),
                 (&tick.wrench_cf[..], 4),
                 (&tick.desired_cf[..], 4),
-                (&tick.frame_z[..], 5),
+                (&tick.frame_z()[..], 5),
             ];
             for (values, precision) in columns {
                 for value in values {
@@ -266,7 +289,37 @@ pub fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::push_fixed;
+    use super::{push_fixed, JointValues, Tick};
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    /// The frame's z axis and the desired force in base axes equal what nalgebra's rotation of
+    /// the stored quaternion gives, for frames turned every way.
+    #[test]
+    fn a_ticks_frame_turns_its_desired_force_into_the_base() {
+        for (roll, pitch, yaw) in [(0.0, 0.0, 0.0), (0.3, -1.1, 2.0), (3.0, 0.5, -0.7), (-1.5, 1.5, 0.1)] {
+            let rotation = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+            let q = rotation.quaternion();
+            let tick = Tick {
+                t_s: 0.0,
+                state: 0,
+                desired: [0.0; 7],
+                measured: [0.0; 7],
+                wrench_base: [0.0; 6],
+                wrench_cf: [0.0; 6],
+                desired_cf: [1.0, -2.0, 10.0, 0.0, 0.0, 0.0],
+                frame: [q.w, q.i, q.j, q.k],
+                selection: 0,
+                torques: JointValues::from_slices(&[]),
+                joint_state: JointValues::from_slices(&[]),
+            };
+            let z = rotation * Vector3::z();
+            let f = rotation * Vector3::new(1.0, -2.0, 10.0);
+            for axis in 0..3 {
+                assert!((tick.frame_z()[axis] - z[axis]).abs() < 1e-12, "{roll} {pitch} {yaw}");
+                assert!((tick.desired_force_base()[axis] - f[axis]).abs() < 1e-12);
+            }
+        }
+    }
 
     fn fixed(value: f64, precision: usize) -> String {
         let mut out = Vec::new();

@@ -348,7 +348,7 @@ fn tick_record(
             desired_cf[axis] = 0.0;
         }
     }
-    let z = cmd.frame.rotation * Vector3::z();
+    let frame = cmd.frame.rotation.quaternion();
     Tick {
         t_s,
         state,
@@ -357,7 +357,7 @@ fn tick_record(
         wrench_base: [applied[0], applied[1], applied[2], applied[3], applied[4], applied[5]],
         wrench_cf: in_frame(&applied),
         desired_cf,
-        frame_z: [z.x, z.y, z.z],
+        frame: [frame.w, frame.i, frame.j, frame.k],
         selection,
         torques: JointValues::from_slices(&[torques]),
         joint_state: JointValues::from_slices(&[obs.q.as_slice(), obs.qd.as_slice()]),

@@ -62,6 +62,21 @@ impl RunLogTopics {
     /// desired one (the force the controller's target applied force meets back, zero on
     /// position axes). An arrow under [`FORCE_ARROW_MIN_N`] is deleted.
     pub const CONTACT_FORCE: &'static str = "/contact_force";
+
+    /// Every topic with its type, in the order the bag registers them. The first three need the
+    /// robot's model and are left out without it.
+    pub const ALL: [(&'static str, MsgType); 10] = [
+        (Self::ROBOT_DESCRIPTION, MsgType::String),
+        (Self::TF_STATIC, MsgType::TfMessage),
+        (Self::TF, MsgType::TfMessage),
+        (Self::SCENE, MsgType::MarkerArray),
+        (Self::JOINT_STATES, MsgType::JointState),
+        (Self::TOOL_POSE, MsgType::PoseStamped),
+        (Self::DESIRED_POSE, MsgType::PoseStamped),
+        (Self::WRENCH, MsgType::WrenchStamped),
+        (Self::CONTACT_FORCE, MsgType::MarkerArray),
+        (Self::STATE, MsgType::String),
+    ];
 }
 
 /// The length of a force arrow per newton of force \[m/N\]: 10 N draws 5 cm.
@@ -304,26 +319,9 @@ pub fn write_run_log(
     description: Option<&RobotDescription<'_>>,
     objects: &BTreeMap<String, ObjectSpec>,
 ) -> Result<Vec<u8>, BagError> {
-    let mut topics = vec![
-        (RunLogTopics::SCENE, MsgType::MarkerArray),
-        (RunLogTopics::JOINT_STATES, MsgType::JointState),
-        (RunLogTopics::TOOL_POSE, MsgType::PoseStamped),
-        (RunLogTopics::DESIRED_POSE, MsgType::PoseStamped),
-        (RunLogTopics::WRENCH, MsgType::WrenchStamped),
-        (RunLogTopics::CONTACT_FORCE, MsgType::MarkerArray),
-        (RunLogTopics::STATE, MsgType::String),
-    ];
-    if description.is_some() {
-        topics.splice(
-            0..0,
-            [
-                (RunLogTopics::ROBOT_DESCRIPTION, MsgType::String),
-                (RunLogTopics::TF_STATIC, MsgType::TfMessage),
-                (RunLogTopics::TF, MsgType::TfMessage),
-            ],
-        );
-    }
-    let mut bag = Bag::new(&topics)?;
+    let robot_topics = if description.is_some() { 0 } else { 3 };
+    let topics = &RunLogTopics::ALL[robot_topics..];
+    let mut bag = Bag::new(topics)?;
     let first_t = logs
         .iter()
         .find_map(|(_, log)| log.ticks.first())

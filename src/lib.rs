@@ -20,5 +20,6 @@ pub mod render;
 pub mod robot_cmd;
 pub mod ros;
 pub mod run_cmd;
+pub mod scene_view;
 
 pub use cli::{run, Cli};

@@ -199,6 +199,9 @@ pub struct Outcome {
     pub log: RunLog,
     /// A task trial's tick log per entry of its `steps`.
     pub step_logs: Vec<RunLog>,
+    /// The scene's objects as the trial ran them (its variant's settings applied), for the
+    /// report's 3-D picture; empty when the trial did not run.
+    pub objects: std::collections::BTreeMap<String, skill_runtime::sim::ObjectSpec>,
 }
 
 impl Outcome {
@@ -233,6 +236,7 @@ impl Outcome {
             },
             log: RunLog::default(),
             step_logs: Vec::new(),
+            objects: Default::default(),
         }
     }
 
@@ -485,6 +489,7 @@ fn run_job(
         },
         log,
         step_logs: Vec::new(),
+        objects: scene.spec().objects.clone(),
     }
 }
 

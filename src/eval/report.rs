@@ -8,6 +8,7 @@ use super::tasks::{StepResult, TaskView};
 use super::{Outcome, SkillView};
 use crate::atomic;
 use crate::plot::{self, Plot};
+use skill_runtime::exec::RunLog;
 
 fn percent(value: Option<f64>) -> String {
     value.map_or("-".to_string(), |v| format!("{:.1}", v * 100.0))
@@ -176,7 +177,7 @@ fn fill(
 
     let mut html = String::new();
     html.push_str("<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>skillc eval</title>\n<style>\n");
-    html.push_str("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td.l,th.l{text-align:left}.yes{background:#dfd}.no{background:#fdd}.err{background:#fb8}img{max-width:100%;border:1px solid #eee;margin:4px 0}pre{background:#f6f6f6;padding:1em}\n");
+    html.push_str("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td.l,th.l{text-align:left}.yes{background:#dfd}.no{background:#fdd}.err{background:#fb8}img{max-width:100%;border:1px solid #eee;margin:4px 0}.views{display:flex;flex-wrap:wrap;gap:6px}figure.view{margin:0;width:380px}figure.view img{width:100%;height:auto}pre{background:#f6f6f6;padding:1em}\n");
     html.push_str(".summary td,.summary th{font-size:1.05em}.failures li{margin:4px 0}input#filter{margin:8px 0;padding:4px;width:24em}th.sort{cursor:pointer}\n");
     html.push_str("</style></head><body>\n<h1>skillc eval</h1>\n");
     html.push_str(&first_screen(outcomes, skills, tasks));
@@ -273,6 +274,11 @@ fn fill(
                 }
             }
         }
+        let trials: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| o.result.skill == skill.name && o.result.mode != "task")
+            .collect();
+        trial_views(&mut html, out, skill.name, &trials);
     }
     for task in tasks {
         let _ = writeln!(
@@ -328,6 +334,7 @@ fn fill(
                 }
             }
         }
+        trial_views(&mut html, out, task.name, &trials);
     }
     if !real.is_empty() {
         html.push_str("<h2>Real demonstrations</h2>\n<p>The wipe template (approach, strokes in contact, retreat) learned from each real demonstration; boundary errors are the distance from each of the authors' label boundaries to the nearest boundary found.</p>\n");
@@ -430,8 +437,13 @@ fn first_screen(outcomes: &[Outcome], skills: &[SkillView<'_>], tasks: &[TaskVie
 
 /// An HTML id for a skill or task name (letters, digits, `-` and `_` kept).
 fn anchor(name: &str) -> String {
-    let id: String = name
-        .chars()
+    format!("trial-{}", safe_name(name))
+}
+
+/// `name` with every character but letters, digits, `-` and `_` made a `-`: an HTML id's or a
+/// file name's part.
+fn safe_name(name: &str) -> String {
+    name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
                 c
@@ -439,8 +451,46 @@ fn anchor(name: &str) -> String {
                 '-'
             }
         })
+        .collect()
+}
+
+/// Each trial of `trials` in 3-D (the tool's path over its scene, contact coloured by force),
+/// as a grid of pictures; a trial that did not run is left out.
+fn trial_views(html: &mut String, out: &Path, name: &str, trials: &[&Outcome]) {
+    let drawn: Vec<String> = trials
+        .iter()
+        .filter(|o| !o.result.error)
+        .map(|o| {
+            let r = &o.result;
+            let logs: Vec<&RunLog> = if o.step_logs.is_empty() {
+                vec![&o.log]
+            } else {
+                o.step_logs.iter().collect()
+            };
+            let file = format!("{}_{}_{}_3d.svg", safe_name(name), safe_name(&r.variant), r.mode);
+            let verdict = if r.success { "success" } else { "failure" };
+            let title = format!("{} · {} · {} · {verdict}", r.skill, r.variant, r.mode);
+            match crate::scene_view::draw(&out.join("plots").join(&file), &title, &logs, &o.objects) {
+                Ok(()) => format!(
+                    "<figure class=view><img src=\"plots/{file}\" alt=\"{} {} in 3-D\" loading=lazy width=560 height=440><figcaption class={}>{} {}: {verdict}</figcaption></figure>",
+                    escape(&r.variant),
+                    r.mode,
+                    if r.success { "yes" } else { "no" },
+                    escape(&r.variant),
+                    r.mode
+                ),
+                Err(err) => format!("<p class=err>3-D picture of {} failed: {}</p>", escape(&r.variant), escape(&err)),
+            }
+        })
         .collect();
-    format!("trial-{id}")
+    if drawn.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        html,
+        "<details open><summary>Each trial in 3-D: the tool's path (grey line, green dot: start, cross: end) over the scene's objects (grey faces, cut where the view ends), contact points coloured by the force, one metre as long on every axis, z up</summary>\n<div class=views>{}</div></details>",
+        drawn.join("\n")
+    );
 }
 
 /// A few lines of plain script: click a heading to sort the table by it, type to filter rows.

@@ -415,7 +415,9 @@ pub(super) fn run_trial(prepared: &PreparedTask, variant: &Variant, limits: &[(S
         Ok(run) => run,
         Err(err) => return failed(prepared, variant, sets, error_chain(&err)),
     };
-    judge(prepared, ready, &steps, run.steps, variant, sets)
+    let mut outcome = judge(prepared, ready, &steps, run.steps, variant, sets);
+    outcome.objects = scene.spec().objects.clone();
+    outcome
 }
 
 /// Judges every step of a task's run, in order; the task succeeds when every step does.
@@ -549,6 +551,7 @@ fn judge(
         },
         log: RunLog::default(),
         step_logs: logs,
+        objects: Default::default(),
     }
 }
 

@@ -173,6 +173,8 @@ fn run_writes_its_log_as_mcap_with_one_message_per_tick() {
         (RunLogTopics::TF, MsgType::TfMessage),
         (RunLogTopics::TF_STATIC, MsgType::TfMessage),
         (RunLogTopics::ROBOT_DESCRIPTION, MsgType::String),
+        (RunLogTopics::SCENE, MsgType::MarkerArray),
+        (RunLogTopics::CONTACT_FORCE, MsgType::MarkerArray),
     ];
     assert_eq!(topics.len(), expected.len());
     for (topic, ty) in expected {
@@ -181,8 +183,12 @@ fn run_writes_its_log_as_mcap_with_one_message_per_tick() {
         assert_eq!(schema_encoding, "ros2msg", "{topic}");
         assert_eq!(encoding, "cdr", "{topic}");
         match topic {
-            RunLogTopics::TF => assert_eq!(payloads.len(), ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS)),
-            RunLogTopics::TF_STATIC | RunLogTopics::ROBOT_DESCRIPTION => assert_eq!(payloads.len(), 1, "{topic}"),
+            RunLogTopics::TF | RunLogTopics::CONTACT_FORCE => {
+                assert_eq!(payloads.len(), ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS), "{topic}")
+            }
+            RunLogTopics::TF_STATIC | RunLogTopics::ROBOT_DESCRIPTION | RunLogTopics::SCENE => {
+                assert_eq!(payloads.len(), 1, "{topic}")
+            }
             _ if ty != MsgType::String => assert_eq!(payloads.len(), ticks, "{topic}: one message per tick"),
             _ => {}
         }

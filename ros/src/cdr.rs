@@ -88,7 +88,7 @@ impl CdrWriter {
 
     /// A `uint8[]`.
     pub fn bytes(&mut self, values: &[u8]) {
-        self.u32(u32::try_from(values.len()).unwrap_or(u32::MAX));
+        self.count(values.len());
         self.buf.extend_from_slice(values);
     }
 
@@ -100,9 +100,15 @@ impl CdrWriter {
         self.buf.push(0);
     }
 
+    /// A sequence's element count (the `uint32` before its elements; a count past `u32::MAX`,
+    /// which no message can hold, is written as `u32::MAX`).
+    pub fn count(&mut self, len: usize) {
+        self.u32(u32::try_from(len).unwrap_or(u32::MAX));
+    }
+
     /// A `float64[]`.
     pub fn f64_seq(&mut self, values: &[f64]) {
-        self.u32(u32::try_from(values.len()).unwrap_or(u32::MAX));
+        self.count(values.len());
         for value in values {
             self.f64(*value);
         }
@@ -110,7 +116,7 @@ impl CdrWriter {
 
     /// A `string[]`.
     pub fn string_seq(&mut self, values: &[String]) {
-        self.u32(u32::try_from(values.len()).unwrap_or(u32::MAX));
+        self.count(values.len());
         for value in values {
             self.string(value);
         }
@@ -194,44 +200,35 @@ impl<'a> CdrReader<'a> {
         Ok(out)
     }
 
+    /// A number of `N` bytes in the message's byte order, decoded by `le` or `be`.
+    fn number<const N: usize, T>(
+        &mut self,
+        what: &str,
+        le: fn([u8; N]) -> T,
+        be: fn([u8; N]) -> T,
+    ) -> Result<T, CdrError> {
+        let bytes = self.take::<N>(what)?;
+        Ok(if self.little_endian { le(bytes) } else { be(bytes) })
+    }
+
     /// A `uint32`; `what` names the field in an error.
     pub fn u32(&mut self, what: &str) -> Result<u32, CdrError> {
-        let bytes = self.take::<4>(what)?;
-        Ok(if self.little_endian {
-            u32::from_le_bytes(bytes)
-        } else {
-            u32::from_be_bytes(bytes)
-        })
+        self.number(what, u32::from_le_bytes, u32::from_be_bytes)
     }
 
     /// An `int32`.
     pub fn i32(&mut self, what: &str) -> Result<i32, CdrError> {
-        let bytes = self.take::<4>(what)?;
-        Ok(if self.little_endian {
-            i32::from_le_bytes(bytes)
-        } else {
-            i32::from_be_bytes(bytes)
-        })
+        self.number(what, i32::from_le_bytes, i32::from_be_bytes)
     }
 
     /// A `float64`.
     pub fn f64(&mut self, what: &str) -> Result<f64, CdrError> {
-        let bytes = self.take::<8>(what)?;
-        Ok(if self.little_endian {
-            f64::from_le_bytes(bytes)
-        } else {
-            f64::from_be_bytes(bytes)
-        })
+        self.number(what, f64::from_le_bytes, f64::from_be_bytes)
     }
 
     /// A `float32`.
     pub fn f32(&mut self, what: &str) -> Result<f32, CdrError> {
-        let bytes = self.take::<4>(what)?;
-        Ok(if self.little_endian {
-            f32::from_le_bytes(bytes)
-        } else {
-            f32::from_be_bytes(bytes)
-        })
+        self.number(what, f32::from_le_bytes, f32::from_be_bytes)
     }
 
     /// A `bool`: a byte that must be 0 or 1.

@@ -373,7 +373,7 @@ const MIN_TRANSFORM_BYTES: usize = 8 + 4 + 4 + 7 * 8;
 /// `tf2_msgs/TFMessage`'s CDR bytes.
 pub fn encode_tf(transforms: &[TransformStamped]) -> Vec<u8> {
     let mut writer = CdrWriter::new();
-    writer.u32(u32::try_from(transforms.len()).unwrap_or(u32::MAX));
+    writer.count(transforms.len());
     for transform in transforms {
         write_header(&mut writer, &transform.header);
         writer.string(&transform.child_frame_id);
@@ -474,7 +474,7 @@ impl Float64MultiArray {
     /// The CDR bytes.
     pub fn encode(&self) -> Vec<u8> {
         let mut writer = CdrWriter::new();
-        writer.u32(self.dim.len() as u32);
+        writer.count(self.dim.len());
         for dim in &self.dim {
             writer.string(&dim.label);
             writer.u32(dim.size);
@@ -582,16 +582,16 @@ fn write_marker(writer: &mut CdrWriter, marker: &Marker) {
     writer.i32(marker.lifetime.sec);
     writer.u32(marker.lifetime.nanosec);
     writer.bool(marker.frame_locked);
-    writer.u32(u32::try_from(marker.points.len()).unwrap_or(u32::MAX));
+    writer.count(marker.points.len());
     for point in &marker.points {
         write_f64s(writer, point);
     }
-    writer.u32(0); // colors
+    writer.count(0); // colors
     writer.string(""); // texture_resource
     write_header(writer, &Header::default()); // texture.header
     writer.string(""); // texture.format
     writer.bytes(&[]); // texture.data
-    writer.u32(0); // uv_coordinates
+    writer.count(0); // uv_coordinates
     writer.string(&marker.text);
     writer.string(""); // mesh_resource
     writer.string(""); // mesh_file.filename
@@ -691,7 +691,7 @@ fn read_marker(reader: &mut CdrReader<'_>) -> Result<Marker, CdrError> {
 /// `visualization_msgs/MarkerArray`'s CDR bytes.
 pub fn encode_markers(markers: &[Marker]) -> Vec<u8> {
     let mut writer = CdrWriter::new();
-    writer.u32(u32::try_from(markers.len()).unwrap_or(u32::MAX));
+    writer.count(markers.len());
     for marker in markers {
         write_marker(&mut writer, marker);
     }

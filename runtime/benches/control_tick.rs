@@ -44,6 +44,7 @@ fn controller_tick(c: &mut Criterion) {
         pose: tool,
         twist: Vector6::new(0.05, 0.02, 0.0, 0.0, 0.0, 0.0),
         wrench: Vector6::new(0.0, 0.0, -10.0, 0.0, 0.0, 0.0),
+        force_twist: Vector6::zeros(),
         frame: Isometry3::from_parts(
             Translation3::from(tool.translation.vector),
             UnitQuaternion::from_euler_angles(3.1, 0.05, 0.0),

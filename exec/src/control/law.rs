@@ -112,6 +112,11 @@ pub struct Command {
     pub twist: Vector6<f64>,
     /// Desired applied wrench `[f; m]` at the tool point (used on force-controlled axes).
     pub wrench: Vector6<f64>,
+    /// The twist `[v; ω]` the force-controlled axes are expected to move at (used on them only;
+    /// zero for none): their damping acts on the difference, so travel the desired force asks
+    /// for (a button's cap going down its spring as the force rises, see
+    /// [`crate::control::travel`]) is not paid for in force.
+    pub force_twist: Vector6<f64>,
     /// The compliant frame in which `position` and `stiffness` are given.
     pub frame: Isometry3<f64>,
     /// Per compliant-frame axis: position-controlled (`true`) or force-controlled.
@@ -133,6 +138,7 @@ impl Command {
             pose,
             twist: Vector6::zeros(),
             wrench: Vector6::zeros(),
+            force_twist: Vector6::zeros(),
             frame: Isometry3::identity(),
             position: [true; 6],
             stiffness,
@@ -296,6 +302,7 @@ impl HybridController {
         // position-controlled part (Ad S Ad⁻¹ in the control frame).
         let twist_cf = ad_inv * state.twist;
         let cmd_twist_cf = ad_inv * cmd.twist;
+        let force_twist_cf = ad_inv * cmd.force_twist;
         let mut d_cf = Vector6::zeros();
         let mut k_s = Vector6::zeros();
         for axis in 0..6 {
@@ -331,7 +338,7 @@ impl HybridController {
             wrench_cf[axis] += if cmd.position[axis] {
                 k_s[axis] * e_p_cf[axis] - d_cf[axis] * (twist_cf[axis] - cmd_twist_cf[axis])
             } else {
-                desired_cf[axis] + cmd.kp * e_f_cf[axis] - d_cf[axis] * twist_cf[axis]
+                desired_cf[axis] + cmd.kp * e_f_cf[axis] - d_cf[axis] * (twist_cf[axis] - force_twist_cf[axis])
             };
         }
         ad_inv.tr_mul(&wrench_cf)
@@ -461,6 +468,7 @@ mod tests {
             ),
             twist: Vector6::zeros(),
             wrench: Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            force_twist: Vector6::zeros(),
             frame,
             position,
             stiffness: [2000.0, 1500.0, 1000.0, 150.0, 120.0, 100.0],
@@ -506,16 +514,55 @@ mod tests {
         }
         let damping = adg * d_cf * ad_inv;
         let twist_selected = ad * select * ad_inv * cmd.twist;
+        let force_twist_selected = ad * (Matrix6::identity() - select) * ad_inv * cmd.force_twist;
         let e_f = cmd.wrench - state.applied;
         let (e_f_cf, twist_cf, desired_cf) = (adg_inv * e_f, ad_inv * state.twist, adg_inv * cmd.wrench);
         // The brake and the integral are per-axis rules in the compliant frame, shared.
         let brake_cf =
             HybridController::brake_and_integrate(gains, cmd, &twist_cf, &e_f_cf, &desired_cf, integral_cf, dt);
-        omega * e_p - damping * (state.twist - twist_selected)
+        omega * e_p - damping * (state.twist - twist_selected - force_twist_selected)
             + omega_tilde * cmd.wrench
             + omega_tilde * e_f * cmd.kp
             + adg * (*integral_cf * cmd.ki)
             + adg * brake_cf
+    }
+
+    #[test]
+    fn a_force_axis_does_not_damp_the_travel_its_force_twist_asks_for() {
+        let gains = ControllerGains::default();
+        // Pressing down (compliant z along −z of the base) at 5 N with 4 N applied, moving
+        // down at 10 mm/s.
+        let frame = Isometry3::from_parts(
+            Translation3::new(0.5, 0.0, 0.3),
+            UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0),
+        );
+        let mut cmd = command(frame, [true, true, false, true, true, true]);
+        cmd.pose = frame;
+        cmd.wrench = Vector6::new(0.0, 0.0, -5.0, 0.0, 0.0, 0.0);
+        cmd.ki = 0.0;
+        let mut state = state_at(frame, Vector6::new(0.0, 0.0, -4.0, 0.0, 0.0, 0.0));
+        state.twist = Vector6::new(0.0, 0.0, -0.01, 0.0, 0.0, 0.0);
+        let along_z = |cmd: &Command| {
+            let mut integral = Vector6::zeros();
+            -HybridController::cartesian_wrench(&gains, &state, cmd, &mut integral, 1e-3)[2]
+        };
+        // Damped: 5 + 0.5 · 1 − 40 · 0.01 = 5.1 N.
+        let damped = along_z(&cmd);
+        assert!(
+            (damped - (5.0 + 0.5 - gains.force_axis_damping * 0.01)).abs() < 1e-9,
+            "{damped}"
+        );
+        // Asked to travel at what it travels at: no damping, 5.5 N.
+        cmd.force_twist = state.twist;
+        assert!((along_z(&cmd) - 5.5).abs() < 1e-9, "{}", along_z(&cmd));
+        // A force twist along a position-controlled axis changes nothing there.
+        cmd.force_twist = Vector6::new(0.3, 0.0, -0.01, 0.0, 0.0, 0.0);
+        let mut integral = Vector6::zeros();
+        let sideways = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 1e-3)[0];
+        cmd.force_twist = state.twist;
+        let mut integral = Vector6::zeros();
+        let plain = HybridController::cartesian_wrench(&gains, &state, &cmd, &mut integral, 1e-3)[0];
+        assert_eq!(sideways, plain);
     }
 
     #[test]
@@ -535,6 +582,7 @@ mod tests {
             let mut vec6 = |scale: f64| Vector6::from_fn(|_, _| scale * next());
             let (twist, cmd_twist) = (vec6(0.3), vec6(0.2));
             let (applied, wrench) = (vec6(30.0), vec6(20.0));
+            let force_twist = vec6(0.02);
             let mut pose = |offset: f64| {
                 Isometry3::from_parts(
                     Translation3::new(0.5 + 0.1 * next(), 0.1 * next(), offset + 0.1 * next()),
@@ -547,6 +595,7 @@ mod tests {
             cmd.pose = goal;
             cmd.twist = cmd_twist;
             cmd.wrench = wrench;
+            cmd.force_twist = force_twist;
             let state = ControlState { tool, twist, applied };
             let start = Vector6::from_fn(|_, _| 3.0 * next());
             let (mut fast_integral, mut reference_integral) = (start, start);

@@ -11,6 +11,7 @@ use super::bind::BoundSkill;
 use super::motion::{motion_start, offset_to_place, start_profile, MotionRollout};
 use super::rig::Rig;
 use super::run::ExecError;
+use crate::control::travel::TravelFeedForward;
 use crate::control::Command;
 use crate::dmp::{DmpError, DmpRollout};
 use crate::skill::LearnedForce;
@@ -72,6 +73,8 @@ pub(super) struct Machine<'b, 'a> {
     force_profile: Option<DmpRollout>,
     extension: Option<Extension>,
     velocity: [f64; 3],
+    /// Scratch for the force profile's velocity.
+    force_velocity: [f64; 3],
     /// Guarded approach of the current state: near its motion's goal, where contact is expected,
     /// the motion slows to a contact-safe speed.
     guarded: Option<GuardedApproach>,
@@ -109,6 +112,9 @@ pub(super) struct Machine<'b, 'a> {
     /// The measured contact normal the current state's compliant frame follows, if it does
     /// (see [`NormalFollow`]).
     follow: Option<NormalFollow>,
+    /// The stiffness a state pressing in place meets and its desired force's rate, for the
+    /// force axis's rate feed-forward (`None` in other states; see [`crate::control::travel`]).
+    travel: Option<TravelFeedForward>,
 }
 
 /// How long the force of a state that pushes while it moves may stay below half its desired
@@ -480,6 +486,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             force_profile: None,
             extension: None,
             velocity: [0.0; 3],
+            force_velocity: [0.0; 3],
             guarded: None,
             motion_clock_s: 0.0,
             lift: None,
@@ -494,6 +501,7 @@ impl<'b, 'a> Machine<'b, 'a> {
             captures: HashMap::new(),
             contact: ContactWatch::default(),
             follow: None,
+            travel: None,
         };
         machine.enter(skill.initial, rig.time_s(), rig)?;
         Ok(machine)
@@ -543,6 +551,7 @@ impl<'b, 'a> Machine<'b, 'a> {
         self.hold_timers.clear();
         self.contact = ContactWatch::default();
         self.follow = None;
+        self.travel = None;
         let flange = rig.flange();
         self.held = flange;
         self.entry_tool = rig.tool();
@@ -554,6 +563,11 @@ impl<'b, 'a> Machine<'b, 'a> {
         }
         self.guarded = guarded_approach(self.skill(), active);
         self.follow = NormalFollow::of(self.bound, active, t);
+        // Pressing in place along the compliant z: the tool's travel along it is the give of
+        // what it presses (a moving state travels along z with the surface's shape too).
+        if !active.position_controlled[2] && active.motion.is_none() {
+            self.travel = Some(TravelFeedForward::new());
+        }
         let applied = rig.controller.state().applied.fixed_rows::<3>(0).into_owned();
         let forcing = active.position_controlled.contains(&false);
         if forcing && !was_forcing {
@@ -1002,7 +1016,16 @@ impl<'b, 'a> Machine<'b, 'a> {
         if let (Some(profile), Some(dmp)) = (&mut self.force_profile, profile_dmp) {
             let rate = match self.motion {
                 Some(_) => moving_profile_rate(sensed.force_lag_n),
-                None => profile_rate(sensed.force_lag_n),
+                None => {
+                    // The profile's own rate along the compliant z, at full clock.
+                    profile.velocity_into(&mut self.force_velocity[..profile.position().len()]);
+                    let nominal = match profile.position().len() {
+                        1 => self.force_velocity[0],
+                        _ => Vector3::from(self.force_velocity).dot(&self.last_frame_z),
+                    } * self.overrides.force_scale;
+                    let travel = self.travel.as_ref().and_then(|travel| travel.clock_rate(nominal));
+                    profile_rate(sensed.force_lag_n).min(travel.unwrap_or(1.0))
+                }
             };
             profile.step(dmp, dt * rate);
         }
@@ -1164,10 +1187,26 @@ impl<'b, 'a> Machine<'b, 'a> {
             Some((t0, from)) if t - t0 < FORCE_RAMP_S => from + (force - from) * ((t - t0) / FORCE_RAMP_S).max(0.0),
             _ => force,
         };
+        let force_twist = match &mut self.travel {
+            Some(travel) => {
+                let applied = rig.controller.state().applied.fixed_rows::<3>(0).dot(&z);
+                let desired = force.dot(&z);
+                travel.update(t, rig.tool().translation.vector.dot(&z), applied, desired);
+                let limit = rig
+                    .controller
+                    .gains()
+                    .force_axis_speed_limit(desired - applied, desired);
+                let v = z * travel.velocity(limit);
+                travel.set_speed_limit(limit);
+                Vector6::new(v.x, v.y, v.z, 0.0, 0.0, 0.0)
+            }
+            None => Vector6::zeros(),
+        };
         Command {
             pose,
             twist,
             wrench: Vector6::new(force.x, force.y, force.z, 0.0, 0.0, 0.0),
+            force_twist,
             frame,
             position: active.position_controlled,
             stiffness: active.stiffness,

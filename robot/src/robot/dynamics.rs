@@ -5,10 +5,14 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use super::{JointKind, Robot, RobotData};
 
-/// Joint damping of the damped stop \[N m s/rad\], per unit of effort limit: a 176 N m joint gets
-/// 176 × 0.2 = 35 N m s/rad, which stops the LWR-IV's arm from 1 rad/s within a few ticks
-/// without ringing.
-pub const STOP_DAMPING_PER_EFFORT: f64 = 0.2;
+/// The time constant of the damped stop \[s\]: the stop decelerates the joints as
+/// `q̈ = −q̇ / T` through the arm's own mass matrix, so a joint at 1 rad/s is at 5 % of that in
+/// 3 T (75 ms). Damping each joint by a fixed gain per unit of its effort limit (0.2 N m s/rad per
+/// N m, before) is explicit damping, stable only while `d dt / I < 2`: the LWR-IV's wrist (38 N m,
+/// 7.6 N m s/rad, a few 1e-3 kg m² at 1 kHz) was not, and a reflex with the wrist moving spun it
+/// up to 28 rad/s at its torque limits instead of stopping it. With `M q̇ / T` the decay per tick
+/// is `1 − dt / T` for every joint, whatever its inertia (stable for `dt < 2 T`).
+pub const STOP_TIME_CONSTANT_S: f64 = 0.025;
 
 impl Robot {
     /// Gravity torques g(q) (N m, N) at the configuration of the last
@@ -41,11 +45,11 @@ impl Robot {
         }
     }
 
-    /// The torques of a damped stop at `(q, q̇)`: gravity compensation from the model and joint
-    /// damping of [`STOP_DAMPING_PER_EFFORT`] times each joint's effort limit, within the effort
-    /// limits, so the arm comes to rest where it is, as a real arm's stop category 1 does. Zero
-    /// torques when the state is not finite (the supervisor's reflex and a served plant whose
-    /// controller fell silent both stop the arm this way).
+    /// The torques of a damped stop at `(q, q̇)`: gravity compensation from the model and
+    /// `−M(q) q̇ / T` with `T` = [`STOP_TIME_CONSTANT_S`], within the effort limits (a joint at its
+    /// limit stops more slowly), so the arm comes to rest where it is, as a real arm's stop
+    /// category 1 does. Zero torques when the state is not finite (the supervisor's reflex and a
+    /// served plant whose controller fell silent both stop the arm this way).
     ///
     /// # Panics
     /// If a slice length differs from [`Robot::dof`].
@@ -57,14 +61,18 @@ impl Robot {
         }
         self.forward_kinematics(data, q);
         self.gravity_torques(data, out);
-        for ((tau, joint), qd) in out.iter_mut().zip(self.joints()).zip(qd) {
-            let value = *tau - STOP_DAMPING_PER_EFFORT * joint.effort * qd;
+        let mut mass = std::mem::take(&mut data.mass);
+        self.mass_matrix(data, &mut mass);
+        for (i, (tau, joint)) in out.iter_mut().zip(self.joints()).enumerate() {
+            let momentum: f64 = mass.row(i).iter().zip(qd).map(|(m, v)| m * v).sum();
+            let value = *tau - momentum / STOP_TIME_CONSTANT_S;
             *tau = if value.is_finite() {
                 value.clamp(-joint.effort, joint.effort)
             } else {
                 0.0
             };
         }
+        data.mass = mass;
     }
 
     /// Inverse dynamics τ = M(q) q̈ + C(q, q̇) q̇ + g(q) at the configuration of the last

@@ -1,7 +1,7 @@
 //! Forward kinematics and Jacobians, computed into a preallocated [`RobotData`] workspace.
 
 use nalgebra::{
-    DVector, Isometry3, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, UnitQuaternion, Vector3,
+    DMatrix, DVector, Isometry3, IsometryMatrix3, Matrix3, Matrix6xX, Rotation3, Translation3, UnitQuaternion, Vector3,
 };
 
 use super::{JointKind, Robot};
@@ -27,6 +27,8 @@ pub struct RobotData {
     pub(crate) force: Vec<Vector3<f64>>,
     pub(crate) moment: Vec<Vector3<f64>>,
     pub(crate) zeros: Vec<f64>,
+    /// Scratch for the mass matrix of the damped stop (no allocation per tick).
+    pub(crate) mass: DMatrix<f64>,
     pub(crate) kinematics_done: bool,
 }
 
@@ -63,6 +65,7 @@ impl Robot {
             force: vec![Vector3::zeros(); n],
             moment: vec![Vector3::zeros(); n],
             zeros: vec![0.0; n],
+            mass: DMatrix::zeros(n, n),
             kinematics_done: false,
         }
     }

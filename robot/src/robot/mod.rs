@@ -25,7 +25,7 @@ mod kinematics;
 mod model;
 
 pub use builtin::{BuiltinRobot, BUILTIN_ROBOTS, IIWA14, LWR4};
-pub use dynamics::STOP_DAMPING_PER_EFFORT;
+pub use dynamics::STOP_TIME_CONSTANT_S;
 pub use error::RobotError;
 pub use ik::LWR4_ELBOW_UP;
 pub use inspect::{Inspection, JointSummary};

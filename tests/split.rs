@@ -192,7 +192,13 @@ fn realtime_prints_the_loop_and_ends_in_a_verdict() {
     let line = text
         .lines()
         .find(|line| line.trim_start().starts_with("loop: "))
-        .unwrap_or_else(|| panic!("no loop line in {text}"));
+        .unwrap_or_else(|| {
+            panic!(
+                "no loop line (exit {:?}) in {text}\nstderr: {}",
+                output.status.code(),
+                String::from_utf8_lossy(&output.stderr)
+            )
+        });
     let words: Vec<&str> = line.split_whitespace().collect();
     let ticks: u64 = words[1].parse().expect("ticks");
     let late: u64 = words[3].parse().expect("late");

@@ -6,6 +6,7 @@ pub mod metrics;
 pub mod real;
 mod report;
 pub mod robot;
+mod spark;
 pub mod sweep;
 pub mod tasks;
 mod trials;

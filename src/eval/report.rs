@@ -3,6 +3,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use super::spark;
 use super::real::RealResult;
 use super::tasks::{StepResult, TaskView};
 use super::{Outcome, SkillView};
@@ -115,7 +116,7 @@ fn truncate(text: &str, width: usize) -> String {
     }
 }
 
-fn escape(text: &str) -> String {
+pub(super) fn escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -178,7 +179,7 @@ fn fill(
     let mut html = String::new();
     html.push_str("<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>skillc eval</title>\n<style>\n");
     html.push_str("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td.l,th.l{text-align:left}.yes{background:#dfd}.no{background:#fdd}.err{background:#fb8}img{max-width:100%;border:1px solid #eee;margin:4px 0}.views{display:flex;flex-wrap:wrap;gap:6px}figure.view{margin:0;width:380px}figure.view img{width:100%;height:auto}pre{background:#f6f6f6;padding:1em}\n");
-    html.push_str(".summary td,.summary th{font-size:1.05em}.failures li{margin:4px 0}input#filter{margin:8px 0;padding:4px;width:24em}th.sort{cursor:pointer}\n");
+    html.push_str(".summary td,.summary th{font-size:1.05em}.failures li{margin:4px 0}input#filter{margin:8px 0;padding:4px;width:24em}th.sort{cursor:pointer}svg.spark{vertical-align:middle}.summary td{padding-top:1px;padding-bottom:1px}\n");
     html.push_str("</style></head><body>\n<h1>skillc eval</h1>\n");
     html.push_str(&first_screen(outcomes, skills, tasks));
     let _ = writeln!(
@@ -370,7 +371,7 @@ fn first_screen(outcomes: &[Outcome], skills: &[SkillView<'_>], tasks: &[TaskVie
     };
     html.push_str("<section id=summary>\n");
     html.push_str(&verdict);
-    html.push_str("<table class=summary><tr><th class=l>skill or task</th><th>passed / run</th><th>worst force RMS %</th><th>worst peak N (its bound)</th><th class=l>plots</th></tr>\n");
+    html.push_str("<table class=summary><tr><th class=l>skill or task</th><th>passed / run</th><th>worst force RMS %</th><th>worst peak N (its bound)</th><th class=l>worst trial: force along z (blue) against its target (dashed)</th><th class=l>plots</th></tr>\n");
     let names = skills
         .iter()
         .map(|s| (s.name, "skill"))
@@ -396,10 +397,18 @@ fn first_screen(outcomes: &[Outcome], skills: &[SkillView<'_>], tasks: &[TaskVie
             None => format!("{peak:.1}"),
         });
         let ok = passed == trials.len() && !trials.is_empty();
+        let chart = spark::worst(&trials).map_or(String::new(), |worst| {
+            format!(
+                "{} <small>{}{}</small>",
+                spark::chart(worst),
+                escape(&worst.result.variant),
+                worst.result.reason.as_deref().map_or(String::new(), |reason| format!(": {}", escape(reason)))
+            )
+        });
         rows.push((
             ok,
             format!(
-                "<tr class={}><td class=l>{}{}</td><td>{passed} / {}</td><td>{}</td><td>{peak}</td><td class=l><a href=\"#{}\">plots</a></td></tr>\n",
+                "<tr class={}><td class=l>{}{}</td><td>{passed} / {}</td><td>{}</td><td>{peak}</td><td class=l>{chart}</td><td class=l><a href=\"#{}\">plots</a></td></tr>\n",
                 if ok { "yes" } else { "no" },
                 if mode == "task" { "task " } else { "" },
                 escape(name),

@@ -434,7 +434,7 @@ fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(s
         .cloned()
         .ok_or_else(|| Failure::Input(format!("step `{}` runs unknown skill `{}`", step.name, step.skill)))?;
     let learned = match &step.input {
-        skill_ir::StepInput::Demo(path) => learn_from_files(&skill, Path::new(path), &LearnOptions::default())
+        skill_ir::StepInput::Demo(path) => learn_from_files(&skill, Path::new(path), &step_learn_options(step))
             .map_err(|failure| match failure {
                 Failure::Input(message) => Failure::Input(format!("step `{}`: {message}", step.name)),
                 other => other,
@@ -442,6 +442,34 @@ fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(s
         skill_ir::StepInput::Learned(path) => read_learned(Path::new(path))?,
     };
     Ok((skill, learned))
+}
+
+/// How a task step learns from its demonstration: the contact phase its `phase:` names, and
+/// otherwise as `skillc learn` does with no flags.
+pub fn step_learn_options(step: &skill_ir::Step) -> LearnOptions {
+    LearnOptions {
+        phase: step.phase.map(|phase| phase as usize),
+        ..LearnOptions::default()
+    }
+}
+
+/// `step `last` learned contact phase 3 of 3 (14.20-20.40 s, median 6.6 N), as its `phase:` says`,
+/// for a step that learned from one phase of its demonstration.
+fn step_phase_line(step: &skill_ir::Step, learned: &Learned) -> Option<String> {
+    let phases = learned.quality.phases.as_ref()?;
+    let phase = phases.learned?;
+    let [on, off] = *phases.phases_s.get(phase.checked_sub(1)?)?;
+    let median = phases.median_n.get(phase - 1).copied().unwrap_or(f64::NAN);
+    let why = if step.phase.is_some() {
+        "as its `phase:` says"
+    } else {
+        "the longest; `phase: N` picks another"
+    };
+    Some(format!(
+        "step `{}` learned contact phase {phase} of {} ({on:.2}-{off:.2} s, median {median:.1} N), {why}",
+        step.name,
+        phases.phases_s.len()
+    ))
 }
 
 fn bind_all<'b, 'a>(
@@ -520,6 +548,18 @@ fn run_task(
         task.steps.len(),
         fallbacks.concat()
     );
+    // A step that learned from one contact phase of its recording says which (issue 26: mixing
+    // or picking phases is never silent).
+    for (step, (_, learned)) in task
+        .steps
+        .iter()
+        .zip(&prepared)
+        .chain(task.fallbacks.iter().zip(&prepared_fallbacks))
+    {
+        if let Some(line) = step_phase_line(step, learned) {
+            let _ = writeln!(text, "  {line}");
+        }
+    }
     for step in &run.steps {
         let title = format!(
             "{}step `{}` ({})",

@@ -281,3 +281,123 @@ fn learn_prints_the_phases_and_the_one_it_learned() {
     );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn a_task_learns_each_step_from_its_own_phase_of_one_recording() {
+    let generated = generate_varied(
+        StdSkill::Wipe,
+        9,
+        &Variation {
+            passes: 3,
+            ..Variation::default()
+        },
+    );
+    let dir = std::env::temp_dir().join(format!("skillc-step-phases-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(dir.join("three_passes.csv"), skill_runtime::demogen::to_csv(&generated)).expect("write");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let import = root.join("stdlib-skills/wipe.skill");
+    let task = |phases: [&str; 2]| {
+        format!(
+            "import \"{}\"\n\ntask wipe_first_and_last {{\n    step first = wipe(demo: \"three_passes.csv\"{})\n    \
+             step last = wipe(demo: \"three_passes.csv\"{})\n}}\n",
+            import.display(),
+            phases[0],
+            phases[1]
+        )
+    };
+    let path = dir.join("task.skill");
+    std::fs::write(&path, task([", phase: 1", ", phase: 3"])).expect("write task");
+    let program = skillc::load::load_program_with(&path, &[]).expect("the task compiles");
+    let steps = &program.tasks[0].steps;
+    assert_eq!(steps.iter().map(|s| s.phase).collect::<Vec<_>>(), [Some(1), Some(3)]);
+    // Each step learns its own pass's force: the passes are at different forces, so learning
+    // the other pass (or the longest) would miss by more than the bound.
+    let mut learned_n = Vec::new();
+    for (step, pass) in steps.iter().zip([0usize, 2]) {
+        let skill_ir::StepInput::Demo(demo) = &step.input else {
+            panic!("a demonstration step")
+        };
+        let learned = skillc::load::learn_from_files(
+            step.skill_in(&program).expect("the skill"),
+            std::path::Path::new(demo),
+            &skillc::run_cmd::step_learn_options(step),
+        )
+        .expect("the step learns");
+        let phases = learned.quality.phases.as_ref().expect("phases reported");
+        assert_eq!(phases.learned, Some(pass + 1));
+        let force = constant_force(&learned);
+        let median = applied_median(&generated, pass);
+        eprintln!(
+            "step `{}`: phase {}, {force:.2} N for a median {median:.2} N",
+            step.name,
+            pass + 1
+        );
+        assert!(
+            (force - median).abs() / median < 0.15,
+            "step `{}`: {force} N for {median} N",
+            step.name
+        );
+        learned_n.push(force);
+    }
+    // Each step's force is nearer its own pass's median than the other's: the steps did not
+    // learn the same pass.
+    let [first, third] = [applied_median(&generated, 0), applied_median(&generated, 2)];
+    assert!(
+        (learned_n[0] - first).abs() < (learned_n[0] - third).abs()
+            && (learned_n[1] - third).abs() < (learned_n[1] - first).abs(),
+        "learned {learned_n:?} N for passes at {first} N and {third} N"
+    );
+    // A phase the recording does not have fails before anything runs, naming the step.
+    std::fs::write(&path, task([", phase: 1", ", phase: 4"])).expect("write task");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_skillc"))
+        .arg("run")
+        .arg(&path)
+        .arg("--scene")
+        .arg(root.join("examples/scenes/table.toml"))
+        .output()
+        .expect("skillc runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("step `last`")
+            && stderr.contains("no contact phase 4")
+            && stderr.contains("has 3 contact phase(s)"),
+        "{stderr}"
+    );
+    // `phase` with a learned file is a checker error; `phase: 0` is out of range.
+    for (args, expected) in [
+        (", phase: 0", "the contact phase must be between 1"),
+        (", phase: 2 s", "the contact phase must be a whole number"),
+    ] {
+        std::fs::write(&path, task([args, ""])).expect("write task");
+        let err = skillc::load::load_program_with(&path, &[]).expect_err("refused");
+        assert!(format!("{err:?}").contains(expected), "{args}: {err:?}");
+    }
+    std::fs::write(
+        &path,
+        format!(
+            "import \"{}\"\n\ntask t {{\n    step s = wipe(learned: \"w.json\", phase: 2)\n}}\n",
+            import.display()
+        ),
+    )
+    .expect("write task");
+    let err = skillc::load::load_program_with(&path, &[]).expect_err("refused");
+    assert!(format!("{err:?}").contains("a learned file has none"), "{err:?}");
+    // The whole task runs: both steps wipe the table and the run says so.
+    std::fs::write(&path, task([", phase: 1", ", phase: 3"])).expect("write task");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_skillc"))
+        .arg("run")
+        .arg(&path)
+        .arg("--scene")
+        .arg(root.join("examples/scenes/table.toml"))
+        .output()
+        .expect("skillc runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stdout}");
+    assert!(stdout.contains("step `first` learned contact phase 1 of 3"), "{stdout}");
+    assert!(stdout.contains("step `last` learned contact phase 3 of 3"), "{stdout}");
+    assert_eq!(stdout.matches("success: reached `done`").count(), 2, "{stdout}");
+    std::fs::remove_dir_all(&dir).expect("clean up");
+}

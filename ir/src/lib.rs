@@ -40,7 +40,9 @@ use serde::{Deserialize, Serialize};
 ///   ([`ActiveState::capture_once`]), a transition may only watch ([`Transition::watch`]), and
 ///   guards may be [`Guard::MovedSince`] (all optional or new variants: a version 6 file reads
 ///   as a version 7 file).
-pub const IR_VERSION: u32 = 7;
+/// - 8: a task step may learn from one contact phase of its demonstration ([`Step::phase`])
+///   (optional: a version 7 file reads as a version 8 file without it).
+pub const IR_VERSION: u32 = 8;
 
 /// An offset from a captured pose: [`ActiveState::motion_at_offset`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -1132,6 +1134,11 @@ pub struct Step {
     /// [`Overrides::goal_offset_m`]). Left out of the JSON when `None`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub at: Option<Anchor>,
+    /// `phase: 2`: learn from the demonstration's second contact phase (1-based), as
+    /// `skillc learn --phase 2` does, so that the steps of a task can learn from the phases of
+    /// one recording. Only with [`StepInput::Demo`]. Left out of the JSON when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase: Option<u32>,
     /// Where it is written.
     pub span: SourceSpan,
 }

@@ -87,6 +87,7 @@ fn a_task_step_limit_sits_between_the_skill_and_the_command_line() {
         on_failure: ir::OnFailure::Abort,
         specialised: None,
         at: None,
+        phase: None,
         span: span(),
     };
     let run_task = |step: &ir::Step, options: &ExecOptions| {

@@ -63,6 +63,7 @@ fn a_step_that_ends_in_a_reflex_runs_its_fallback() {
         on_failure,
         specialised: None,
         at: None,
+        phase: None,
         span: span(),
     };
     let tight = vec![ir::Limit {

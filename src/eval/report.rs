@@ -3,8 +3,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::spark;
 use super::real::RealResult;
+use super::spark;
 use super::tasks::{StepResult, TaskView};
 use super::{Outcome, SkillView};
 use crate::atomic;
@@ -402,7 +402,11 @@ fn first_screen(outcomes: &[Outcome], skills: &[SkillView<'_>], tasks: &[TaskVie
                 "{} <small>{}{}</small>",
                 spark::chart(worst),
                 escape(&worst.result.variant),
-                worst.result.reason.as_deref().map_or(String::new(), |reason| format!(": {}", escape(reason)))
+                worst
+                    .result
+                    .reason
+                    .as_deref()
+                    .map_or(String::new(), |reason| format!(": {}", escape(reason)))
             )
         });
         rows.push((

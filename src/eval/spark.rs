@@ -26,7 +26,11 @@ pub(super) fn worst<'a>(trials: &[&'a Outcome]) -> Option<&'a Outcome> {
     if let Some(failed) = drawable.iter().find(|o| o.result.error || !o.result.success) {
         return Some(failed);
     }
-    let share = |o: &Outcome| o.result.peak_bound_n.map_or(0.0, |b| o.result.peak_force_n / b.max(1e-9));
+    let share = |o: &Outcome| {
+        o.result
+            .peak_bound_n
+            .map_or(0.0, |b| o.result.peak_force_n / b.max(1e-9))
+    };
     drawable.into_iter().max_by(|a, b| {
         let rms = |o: &Outcome| o.result.force_rms_rel.unwrap_or(f64::NEG_INFINITY);
         rms(a).total_cmp(&rms(b)).then(share(a).total_cmp(&share(b)))
@@ -160,7 +164,10 @@ mod tests {
         outcome.result.force_rms_rel = rms;
         for i in 0..ticks {
             let share = i as f64 / ticks.max(1) as f64;
-            outcome.log.ticks.push(tick(i as f64 * 1e-3, peak * share, 0.9 * peak * share));
+            outcome
+                .log
+                .ticks
+                .push(tick(i as f64 * 1e-3, peak * share, 0.9 * peak * share));
         }
         outcome
     }
@@ -170,11 +177,15 @@ mod tests {
         svg.split("points=\"")
             .skip(1)
             .map(|rest| {
-                rest.split('"').next().unwrap().split_whitespace().map(|pair| {
-                    let (x, y) = pair.split_once(',').unwrap();
-                    (x.parse().unwrap(), y.parse().unwrap())
-                })
-                .collect()
+                rest.split('"')
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|pair| {
+                        let (x, y) = pair.split_once(',').unwrap();
+                        (x.parse().unwrap(), y.parse().unwrap())
+                    })
+                    .collect()
             })
             .collect()
     }
@@ -199,15 +210,28 @@ mod tests {
         outcome.log.ticks[2500].wrench_cf[2] = 30.0;
         let svg = chart(&outcome);
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>"));
-        assert!(svg.contains("30 N"), "the force axis is labelled with the highest force: {svg}");
+        assert!(
+            svg.contains("30 N"),
+            "the force axis is labelled with the highest force: {svg}"
+        );
         assert!(svg.contains("5.0 s"), "the time axis is labelled with the duration");
-        assert!(svg.contains(">0 N<") && !svg.contains("-0 N"), "the low end of a ramp from 0 is 0 N");
+        assert!(
+            svg.contains(">0 N<") && !svg.contains("-0 N"),
+            "the low end of a ramp from 0 is 0 N"
+        );
         let lines = polylines(&svg);
         assert_eq!(lines.len(), 2, "target and measured");
         for line in &lines {
-            assert!(line.len() <= POINTS && line.len() >= POINTS - 5, "{} points", line.len());
+            assert!(
+                line.len() <= POINTS && line.len() >= POINTS - 5,
+                "{} points",
+                line.len()
+            );
             for &(x, y) in line {
-                assert!((LEFT..=WIDTH).contains(&x) && (0.0..=HEIGHT - BOTTOM).contains(&y), "({x}, {y})");
+                assert!(
+                    (LEFT..=WIDTH).contains(&x) && (0.0..=HEIGHT - BOTTOM).contains(&y),
+                    "({x}, {y})"
+                );
             }
         }
         // The measured line's highest point (smallest y) is at the top of the plot: the spike.

@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use skill_runtime::exec::{bind, simulate_task, BoundSkill, ExecOptions, RunLog, StepReport, TaskStep};
-use skill_runtime::skill::{LearnOptions, Learned};
+use skill_runtime::skill::Learned;
 
 use super::metrics::{self, ContactPlan};
 use super::{robot, Criteria, Outcome, TrialResult, Variant};
@@ -219,9 +219,25 @@ fn learn_step(program: &skill_ir::Program, step: &skill_ir::Step, spec: &TaskTri
             )))
         }
     };
-    let learned = learn_from_files(skill, &demo, &LearnOptions::default()).map_err(|f| field(message_of(f)))?;
+    let learned =
+        learn_from_files(skill, &demo, &crate::run_cmd::step_learn_options(step)).map_err(|f| field(message_of(f)))?;
+    // The peak the step is judged against is its demonstration's, within the contact phase it
+    // learned from when it learned from one (the other phases are other steps' work).
+    let phase_s = learned
+        .quality
+        .phases
+        .as_ref()
+        .and_then(|phases| phases.phases_s.get(phases.learned?.checked_sub(1)?).copied());
     let demo_peak_n = crate::load::read_demo(&demo, &Default::default(), &Default::default())
-        .map(|(loaded, _, _)| loaded.demo.force_n.iter().map(|f| f.norm()).fold(0.0, f64::max))
+        .map(|(loaded, _, _)| {
+            let demo = &loaded.demo;
+            demo.force_n
+                .iter()
+                .zip(&demo.t_s)
+                .filter(|(_, t)| phase_s.is_none_or(|[on, off]| (on..=off).contains(*t)))
+                .map(|(f, _)| f.norm())
+                .fold(0.0, f64::max)
+        })
         .map_err(|f| field(message_of(f)))?;
     Ok(StepLearned {
         learned,

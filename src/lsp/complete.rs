@@ -265,6 +265,11 @@ fn in_task(scope: &Scope<'_>, task: &str, before: &str, blocks: &[Block]) -> Vec
                 ("demo", "demo: \"$1\"", "the demonstration to learn from"),
                 ("learned", "learned: \"$1\"", "a learned file to run"),
                 (
+                    "phase",
+                    "phase: ${1:1}",
+                    "learn from this contact phase of the demonstration",
+                ),
+                (
                     "force_scale",
                     "force_scale: ${1:1.0}",
                     "multiplies every desired force and threshold",

@@ -152,6 +152,9 @@ pub fn describe(analysis: &Analysis, occurrence: &Occurrence) -> Option<String> 
             let meaning = match name.as_str() {
                 "demo" => "the demonstration to learn from (a path relative to this file)",
                 "learned" => "a learned file to run instead of learning from a demonstration",
+                "phase" => {
+                    "learn from this contact phase of the demonstration (1, 2, ...), as `skillc learn --phase N` does"
+                }
                 "force_scale" => "multiplies every desired force and force threshold",
                 "speed" => "multiplies the motion speed",
                 "goal_offset" => "added to every motion goal, base frame",

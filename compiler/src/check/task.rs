@@ -26,7 +26,16 @@ pub(crate) struct StepParams {
 }
 
 /// The arguments every step takes; the others name the skill's parameters.
-pub(crate) const STEP_ARGS: [&str; 7] = ["demo", "learned", "force_scale", "speed", "goal_offset", "limits", "at"];
+pub(crate) const STEP_ARGS: [&str; 8] = [
+    "demo",
+    "learned",
+    "phase",
+    "force_scale",
+    "speed",
+    "goal_offset",
+    "limits",
+    "at",
+];
 
 /// What a task needs to know of a skill in scope.
 #[derive(Debug, Default)]
@@ -202,6 +211,23 @@ impl Checker<'_> {
                     None
                 }
             };
+            // `phase: N` picks one contact phase of the demonstration; a learned file has none.
+            let phase = bound.get("phase").and_then(|expr| {
+                let phase = self.count(expr, "the contact phase")?;
+                if bound.contains_key("learned") {
+                    let diag = self
+                        .diag(
+                            Code::BadArgument,
+                            expr.span,
+                            "`phase` picks a contact phase of a demonstration; a learned file has none",
+                            "with `learned`",
+                        )
+                        .help("learn from the recording instead: `demo: \"....csv\", phase: N`");
+                    self.report(diag);
+                    return None;
+                }
+                Some(phase)
+            });
             let mut overrides = ir::Overrides::default();
             if let Some(expr) = bound.get("force_scale") {
                 let value = self.plain_number(expr, "the force scale");
@@ -275,6 +301,7 @@ impl Checker<'_> {
                     on_failure,
                     specialised: None,
                     at,
+                    phase,
                     span: self.ir_span(step.span),
                 };
                 let list = if step.fallback { &mut fallbacks } else { &mut steps };

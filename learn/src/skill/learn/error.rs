@@ -23,7 +23,7 @@ pub enum LearnError {
         source: SegmentError,
     },
     /// `--phase N` (or a task step's `phase: N`) names a contact phase the demonstration does not have.
-    #[error("`--phase {phase}`: `{source_name}` has {count} contact phase(s){list}")]
+    #[error("no contact phase {phase} to learn from (`--phase {phase}`, a step's `phase: {phase}`): `{source_name}` has {count} contact phase(s){list}")]
     NoSuchPhase {
         /// The demonstration.
         source_name: String,

@@ -754,7 +754,14 @@ impl<'b, 'a> Machine<'b, 'a> {
                     .motion
                     .as_ref()
                     .map_or(self.overrides.speed_factor, |m| m.rollout.speed);
-                let elapsed = clock * speed;
+                let elapsed = match self.frame_segment_order(id.index()) {
+                    // A frame per sample of a later segment holds its first pose (the approach
+                    // to a contour meets the drum where the contour starts), of an earlier one
+                    // its last (the leaving lifts off where the contour ended).
+                    Some(std::cmp::Ordering::Less) => 0.0,
+                    Some(std::cmp::Ordering::Greater) => f64::INFINITY,
+                    _ => self.strokes_demo_time_s().unwrap_or(clock * speed),
+                };
                 let pose = learned.at(elapsed);
                 let rotation = match self.follow {
                     Some(NormalFollow {
@@ -774,6 +781,46 @@ impl<'b, 'a> Machine<'b, 'a> {
                 }
             }
         }
+    }
+
+    /// For a strokes motion, the demonstration time within its segment the running stroke has
+    /// reached \[s\]: the demonstrated strokes before it plus its own progress. Each stroke runs
+    /// at its own speed (slowed for the tool speed limit or not), so one clock times them all
+    /// wrong; past the demonstrated strokes the runs alternate the last two
+    /// ([`crate::skill::LearnedMotion::piece`]) and so do their times. `None` for other motions.
+    fn strokes_demo_time_s(&self) -> Option<f64> {
+        let motion = self.motion.as_ref()?;
+        let strokes = &self.bound.motions[motion.id].strokes;
+        let k = strokes.len();
+        let index = match k {
+            0 => return None,
+            1 => 0,
+            _ if motion.run < k => motion.run,
+            _ => k - 2 + (motion.run - k) % 2,
+        };
+        let before: f64 = strokes[..index].iter().map(|stroke| stroke.position.tau_s).sum();
+        let rollout = &motion.rollout.position;
+        let progress = if rollout.tau_s() > 0.0 {
+            (rollout.time_s() / rollout.tau_s()).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        Some(before + progress * strokes[index].position.tau_s)
+    }
+
+    /// Where the current state's motion lies against the segment learned frame `id` was
+    /// learned from: `Less` when the motion's segment is earlier, `Equal` when it is that
+    /// segment; `None` without a motion or for a frame not learned from a segment.
+    fn frame_segment_order(&self, id: usize) -> Option<std::cmp::Ordering> {
+        let motion = self.motion.as_ref()?;
+        let learn = &self.skill().learn;
+        let frame_segment = match &learn.frames.get(id)?.source {
+            ir::FrameSource::Constraint { segment, .. } | ir::FrameSource::ForceAlignedSamples { segment } => {
+                segment.index()
+            }
+            _ => return None,
+        };
+        Some(learn.motions.get(motion.id)?.segment.index().cmp(&frame_segment))
     }
 
     /// Updates the contact normal the current state's frame follows, if it follows one.

@@ -369,6 +369,19 @@ pub fn summary(learned: &Learned) -> String {
                     "kept"
                 }
             );
+            if let Some(spread) = check.spread_deg {
+                let _ = writeln!(
+                    out,
+                    "  {:<10} the measured normal turns {spread:.1}° about its mean while sliding, {:.1}° about the path's shape: {}",
+                    "",
+                    check.unexplained_deg.unwrap_or(f64::NAN),
+                    if check.follows_surface {
+                        "a curved surface, z follows the measured normal sample by sample"
+                    } else {
+                        "z holds the plane's normal"
+                    }
+                );
+            }
         }
     }
     if !learned.motions.is_empty() {

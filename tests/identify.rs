@@ -107,6 +107,7 @@ fn generated_variants_are_identified_95_times_in_100() {
             rate_hz: rates[(index / 3) % rates.len()],
             time_scale: scales[(index / 5) % scales.len()],
             tilt_rad: tilts[(index / 7) % tilts.len()],
+            curve_deg: 0.0,
         };
         let generated = generate_varied(skill, 1000 + index as u64, &variation);
         let name = format!("{}#{index}", skill.name());

@@ -347,6 +347,11 @@ pub struct Variation {
     pub time_scale: f64,
     /// The whole scene turned about base x through the surface's point \[rad\].
     pub tilt_rad: f64,
+    /// A wipe over a curved part (a car door's fender) when above zero: the strokes run back and
+    /// forth across the drum of `cylinder.toml`, over its crown from minus to plus this angle
+    /// \[deg\] (at most 60), in continuous contact, the force along the surface's normal
+    /// turning with it (the other skills ignore it).
+    pub curve_deg: f64,
 }
 
 impl Default for Variation {
@@ -357,6 +362,7 @@ impl Default for Variation {
             rate_hz: RATE_HZ,
             time_scale: 1.0,
             tilt_rad: 0.0,
+            curve_deg: 0.0,
         }
     }
 }
@@ -493,10 +499,41 @@ fn generate_at_1khz(skill: StdSkill, seed: u64, variation: &Variation) -> Demons
             friction = 0.4;
             let f0 = 8.0;
             force_n = f0;
-            let hover = Vector3::new(0.50, -0.06, 0.365);
-            let c1 = Vector3::new(0.50, -0.06, contact_z);
-            let c2 = Vector3::new(0.60, 0.04, contact_z);
-            let leave = Vector3::new(0.52, -0.04, 0.37);
+            // A curved part: the drum of `cylinder.toml` (axis along y through (0.5466, ·, 0.15),
+            // radius 0.15 m), wiped across its crown.
+            let curved = variation.curve_deg > 0.0;
+            let drum_centre = Vector3::new(0.5466, 0.0, 0.15);
+            let drum_radius = 0.15 + TIP_RADIUS_M;
+            let half_arc = variation.curve_deg.min(60.0).to_radians();
+            let (first_angle, last_angle) = (-half_arc, half_arc);
+            let radial = |angle: f64| Vector3::new(angle.sin(), 0.0, angle.cos());
+            let (hover, c1, c2, leave) = if curved {
+                let c1 = drum_centre + radial(first_angle) * drum_radius;
+                let c2 = drum_centre + radial(last_angle) * drum_radius;
+                (c1 + up * 0.06, c1, c2, c1 + Vector3::new(0.02, 0.02, 0.065))
+            } else {
+                (
+                    Vector3::new(0.50, -0.06, 0.365),
+                    Vector3::new(0.50, -0.06, contact_z),
+                    Vector3::new(0.60, 0.04, contact_z),
+                    Vector3::new(0.52, -0.04, 0.37),
+                )
+            };
+            // Where the tip is and the surface's normal there, `along` the stroke (0 at `c1`, 1
+            // at `c2`) and `bow` to its side.
+            let side = if curved {
+                Vector3::y()
+            } else {
+                Vector3::new(-(c2 - c1).y, (c2 - c1).x, 0.0).normalize()
+            };
+            let place = move |along: f64, bow: f64| {
+                if curved {
+                    let normal = radial(first_angle + (last_angle - first_angle) * along);
+                    (drum_centre + normal * drum_radius + side * bow, normal)
+                } else {
+                    (c1 + (c2 - c1) * along + side * bow, up)
+                }
+            };
             let (w1, w3) = (warp_of(&mut rng), warp_of(&mut rng));
             // Four strokes: out, back, out, back, each with its own timing and a sideways bow
             // (a hand does not retrace its path).
@@ -509,7 +546,6 @@ fn generate_at_1khz(skill: StdSkill, seed: u64, variation: &Variation) -> Demons
             let settle = 0.25;
             let approach_s = rng.range(1.5, 1.8);
             let slow_phase = rng.range(0.0, 2.0 * PI);
-            let side = Vector3::new(-(c2 - c1).y, (c2 - c1).x, 0.0).normalize();
             phases.push(rest(hover));
             phases.push(moving("approach", approach_s, hover, c1, w1));
             let mut at = REST_S + approach_s;
@@ -538,11 +574,11 @@ fn generate_at_1khz(skill: StdSkill, seed: u64, variation: &Variation) -> Demons
                             }
                             begin += duration;
                         }
-                        let position = c1 + (c2 - c1) * along + side * bow;
+                        let (position, normal) = place(along, bow);
                         let force = pressing(local, contact_s, level, t, slow_phase);
                         TipState {
                             position,
-                            normal: up,
+                            normal,
                             normal_force: force,
                         }
                     }),
@@ -568,9 +604,17 @@ fn generate_at_1khz(skill: StdSkill, seed: u64, variation: &Variation) -> Demons
             }
             phases.push(moving("leave", rng.range(1.4, 1.7), c1, leave, w3));
             phases.push(rest(leave));
-            surface = TruthSurface::Plane {
-                point_m: [0.55, 0.0, SURFACE_Z_M],
-                normal: [0.0, 0.0, 1.0],
+            surface = if curved {
+                TruthSurface::Cylinder {
+                    axis_point_m: drum_centre.into(),
+                    axis: [0.0, 1.0, 0.0],
+                    radius_m: 0.15,
+                }
+            } else {
+                TruthSurface::Plane {
+                    point_m: [0.55, 0.0, SURFACE_Z_M],
+                    normal: [0.0, 0.0, 1.0],
+                }
             };
         }
         StdSkill::Touch => {
@@ -987,7 +1031,11 @@ fn generate_at_1khz(skill: StdSkill, seed: u64, variation: &Variation) -> Demons
         samples,
         truth: GroundTruth {
             skill,
-            scene: skill.scene().to_string(),
+            scene: if skill == StdSkill::Wipe && variation.curve_deg > 0.0 {
+                "cylinder.toml".to_string()
+            } else {
+                skill.scene().to_string()
+            },
             seed,
             rate_hz: RATE_HZ,
             tip_in_flange_m: tool.tip_in_flange.into(),

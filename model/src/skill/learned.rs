@@ -466,6 +466,19 @@ pub struct NormalCheck {
     pub friction: f64,
     /// Whether z was replaced by the applied force's direction (without friction).
     pub replaced: bool,
+    /// How far the measured contact normal turns over the segment while the tool slides: the
+    /// 90th percentile of its angle from its mean direction \[°\] (docs/method.md §4, curved
+    /// surfaces). `None` when too few samples slide in contact.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spread_deg: Option<f64>,
+    /// The same percentile about the normals of a quadric fitted to the tool's path \[°\]: what
+    /// the surface's shape leaves unexplained (a hand's lean on a flat part leaves it all).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unexplained_deg: Option<f64>,
+    /// Whether the surface curves (the spread above the learner's bound) and the frame follows
+    /// the measured normal sample by sample instead of holding the plane's.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub follows_surface: bool,
 }
 
 /// How well a motion reproduces its segment.

@@ -55,14 +55,42 @@ impl Learner<'_> {
                         .collect(),
                 );
                 let mut frame = chosen.frame;
+                let mut following = None;
                 if matches!(chosen.kind, ConstraintKind::Planar | ConstraintKind::PointOnPlane) {
-                    if let Some((check, checked)) = self.check_normal(&decl.name, segment.index(), &frame) {
+                    if let Some((mut check, checked)) = self.check_normal(&decl.name, segment.index(), &frame) {
                         frame = checked;
+                        if chosen.kind == ConstraintKind::Planar {
+                            // A plane fitted to strokes over a curved part (a fender) holds one
+                            // normal where the surface has many: follow the measured one.
+                            let range = self.seg(*segment).range();
+                            let normals = measured_normals(
+                                &demo.t_s[range.clone()],
+                                &demo.position_m[range.clone()],
+                                &demo.force_n[range.clone()],
+                            );
+                            let spread = normal_spread(&normals, &demo.position_m[range.clone()]);
+                            check.spread_deg = spread.map(|s| s.about_mean_rad.to_degrees());
+                            check.unexplained_deg = spread.map(|s| s.about_shape_rad.to_degrees());
+                            if spread.is_some_and(NormalSpread::curved) {
+                                check.follows_surface = true;
+                                following = Some(surface_frames(
+                                    &demo.t_s[range.clone()],
+                                    &demo.position_m[range],
+                                    &normals,
+                                    &frame,
+                                ));
+                            }
+                        }
                         self.quality.normals.insert(decl.name.clone(), check);
                     }
                 }
-                let pose = Isometry3::from_parts(frame.origin_m.into(), frame.orientation);
-                LearnedFrame::Constant(FramePose::from_isometry(chosen.kind.into(), &pose, None))
+                match following {
+                    Some(poses) => LearnedFrame::Samples(poses),
+                    None => {
+                        let pose = Isometry3::from_parts(frame.origin_m.into(), frame.orientation);
+                        LearnedFrame::Constant(FramePose::from_isometry(chosen.kind.into(), &pose, None))
+                    }
+                }
             }
             ir::FrameSource::ForceAlignedSamples { segment } => {
                 let seg = self.seg(*segment);
@@ -158,6 +186,9 @@ impl Learner<'_> {
             cone_deg: cone.to_degrees(),
             friction,
             replaced: false,
+            spread_deg: None,
+            unexplained_deg: None,
+            follows_surface: false,
         };
         if angle <= cone {
             return Some((check, *frame));
@@ -187,6 +218,207 @@ impl Learner<'_> {
         ));
         Some((check, replaced))
     }
+}
+
+/// A plane's segment is a curved surface when the measured contact normal turns farther than
+/// this about its mean direction while the tool slides (90th percentile) \[rad\] (10°), and
+/// the path's shape explains it ([`NormalSpread::curved`]): on the shipped flat wipes and
+/// slides and on tilted tables it turns 1.3-1.5° (the hand's tremor and the sensor's noise),
+/// across a fender's crown 19° for a ±20° arc and more for wider ones.
+const CURVED_SPREAD_RAD: f64 = 10.0 * std::f64::consts::PI / 180.0;
+
+/// The slowest slide whose force says where the surface's normal is \[m/s\]: at rest friction
+/// may point anywhere in the tangent plane, and near a reversal or at touch-down the smoothed
+/// velocity's direction lags the slide's, so friction leaks into the estimate (9-13° of error
+/// at 10 mm/s on generated fenders, under 3° from 30 mm/s).
+const MIN_SLIDE_MPS: f64 = 0.03;
+
+/// The measured normals are averaged over this long \[s\]: a period of the hand's 8-12 Hz
+/// tremor, 5-10 mm of stroke at 5-10 cm/s.
+const NORMAL_WINDOW_S: f64 = 0.1;
+
+/// The direction the tool pushes the surface along at each sample (unit, base frame, into the
+/// surface), its friction taken out along the velocity and averaged over [`NORMAL_WINDOW_S`];
+/// `None` where the tool pushes less than [`CONTACT_N`] or slides slower than
+/// [`MIN_SLIDE_MPS`]. On any surface the tool slides along the tangent plane and friction acts
+/// against the slide, so what is left is the normal force (and a hand's sideways lean).
+fn measured_normals(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>]) -> Vec<Option<Vector3<f64>>> {
+    let n = position.len();
+    let smoothed = smooth_points(position, smoothing_window(t));
+    let pushing: Vec<Option<Vector3<f64>>> = (0..n)
+        .map(|k| {
+            let velocity = central_velocity(t, &smoothed, k);
+            let speed = velocity.norm();
+            (speed >= MIN_SLIDE_MPS && force[k].norm() >= CONTACT_N).then(|| {
+                let along = velocity / speed;
+                -(force[k] - along * force[k].dot(&along))
+            })
+        })
+        .collect();
+    // Prefix sums of the valid samples' directions, for a centred window in time.
+    let mut sums = Vec::with_capacity(n + 1);
+    let mut total = Vector3::zeros();
+    sums.push(total);
+    for push in &pushing {
+        if let Some(direction) = push.and_then(|p| p.try_normalize(1e-12)) {
+            total += direction;
+        }
+        sums.push(total);
+    }
+    let half = NORMAL_WINDOW_S / 2.0;
+    (0..n)
+        .map(|k| {
+            pushing[k]?;
+            let a = t.partition_point(|&s| s < t[k] - half);
+            let b = t.partition_point(|&s| s <= t[k] + half);
+            (sums[b] - sums[a]).try_normalize(1e-12)
+        })
+        .collect()
+}
+
+/// How far the measured normals of a segment turn, and how much of it the surface's shape
+/// explains.
+#[derive(Debug, Clone, Copy)]
+struct NormalSpread {
+    /// The 90th percentile of their angle from their mean direction \[rad\].
+    about_mean_rad: f64,
+    /// The 90th percentile of their angle from the normal of a quadric fitted to the tool's
+    /// path (heights along the mean normal over the plane across it) \[rad\].
+    about_shape_rad: f64,
+}
+
+impl NormalSpread {
+    /// A curved surface: the normal turns by more than [`CURVED_SPREAD_RAD`], and the path's
+    /// own shape explains at least half of that turn. A hand that leans while wiping a flat
+    /// part turns the force but not the path (the LASA rim demonstrations turn 11-24°, their
+    /// paths explain little of it); a fender's crown turns both.
+    fn curved(self) -> bool {
+        self.about_mean_rad > CURVED_SPREAD_RAD && self.about_shape_rad < 0.5 * self.about_mean_rad
+    }
+}
+
+/// How far `normals` turn (see [`NormalSpread`]), over the tool positions `position` they were
+/// measured at; `None` with fewer than 20 normals or a path the quadric cannot be fitted to (a
+/// line).
+fn normal_spread(normals: &[Option<Vector3<f64>>], position: &[Vector3<f64>]) -> Option<NormalSpread> {
+    let valid: Vec<(Vector3<f64>, Vector3<f64>)> = normals
+        .iter()
+        .zip(position)
+        .filter_map(|(n, p)| n.map(|n| (n, *p)))
+        .collect();
+    if valid.len() < 20 {
+        return None;
+    }
+    let mean = valid
+        .iter()
+        .map(|(n, _)| n)
+        .sum::<Vector3<f64>>()
+        .try_normalize(1e-12)?;
+    let about_mean_rad = percentile_90(valid.iter().map(|(n, _)| n.angle(&mean)).collect());
+    // The path's heights along the mean normal, fitted by least squares about the path's
+    // centroid over its principal directions s (the longest) and w in the tangent plane: a
+    // quadric h = a + b s + c w + d s² + e s w + f w² where the path covers an area (a circular
+    // wipe), else h = a + b s + c w + d s² (back-and-forth strokes cover a band: a curvature
+    // across it would be fitted to the hand's sideways bow).
+    let any = mean
+        .cross(&Vector3::x())
+        .try_normalize(1e-3)
+        .unwrap_or_else(|| mean.cross(&Vector3::y()).normalize());
+    let other = mean.cross(&any);
+    let centre = valid.iter().map(|(_, p)| p).sum::<Vector3<f64>>() / valid.len() as f64;
+    let mut spread = nalgebra::Matrix2::<f64>::zeros();
+    for (_, p) in &valid {
+        let d = nalgebra::Vector2::new((p - centre).dot(&any), (p - centre).dot(&other));
+        spread += d * d.transpose();
+    }
+    let eigen = spread.symmetric_eigen();
+    let (major, minor) = if eigen.eigenvalues[0] >= eigen.eigenvalues[1] {
+        (0, 1)
+    } else {
+        (1, 0)
+    };
+    let along = |k: usize| (any * eigen.eigenvectors[(0, k)] + other * eigen.eigenvectors[(1, k)]).normalize();
+    let (s_axis, w_axis) = (along(major), along(minor));
+    let area = eigen.eigenvalues[minor].max(0.0) > 0.09 * eigen.eigenvalues[major].max(0.0);
+    let terms = |d: &Vector3<f64>| {
+        let (s, w) = (d.dot(&s_axis), d.dot(&w_axis));
+        let (sw, ww) = if area { (s * w, w * w) } else { (0.0, 0.0) };
+        nalgebra::SVector::<f64, 6>::new(1.0, s, w, s * s, sw, ww)
+    };
+    let mut normal_matrix = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+    let mut rhs = nalgebra::SVector::<f64, 6>::zeros();
+    for (_, p) in &valid {
+        let d = p - centre;
+        let row = terms(&d);
+        normal_matrix += row * row.transpose();
+        rhs += row * d.dot(&mean);
+    }
+    if !area {
+        // The two unused terms: keep the system regular, their coefficients zero.
+        normal_matrix[(4, 4)] = 1.0;
+        normal_matrix[(5, 5)] = 1.0;
+    }
+    let c = normal_matrix.cholesky()?.solve(&rhs);
+    let about_shape_rad = percentile_90(
+        valid
+            .iter()
+            .map(|(n, p)| {
+                let d = p - centre;
+                let (s, w) = (d.dot(&s_axis), d.dot(&w_axis));
+                let (fs, fw) = (c[1] + 2.0 * c[3] * s + c[4] * w, c[2] + c[4] * s + 2.0 * c[5] * w);
+                // Into the surface: the surface h = f lies on the side the tool pushes towards.
+                let shaped = (mean - s_axis * fs - w_axis * fw).normalize();
+                n.angle(&shaped)
+            })
+            .collect(),
+    );
+    Some(NormalSpread {
+        about_mean_rad,
+        about_shape_rad,
+    })
+}
+
+/// The 90th percentile of `values` (not empty).
+fn percentile_90(mut values: Vec<f64>) -> f64 {
+    let at = ((values.len() * 9) / 10).min(values.len() - 1);
+    let (_, p90, _) = values.select_nth_unstable_by(at, f64::total_cmp);
+    *p90
+}
+
+/// A frame per [`FRAME_SAMPLE_PERIOD_S`] over a curved segment: z along the measured normal
+/// (held where the tool does not slide, the first one before it does), x the plane's x turned
+/// into the tangent plane, timed from the segment's start.
+fn surface_frames(
+    t: &[f64],
+    position: &[Vector3<f64>],
+    normals: &[Option<Vector3<f64>>],
+    plane: &CompliantFrame,
+) -> Vec<FramePose> {
+    let mut held = normals
+        .iter()
+        .flatten()
+        .next()
+        .copied()
+        .unwrap_or_else(|| plane.z_axis());
+    let x = plane.x_axis();
+    let mut poses = Vec::new();
+    let mut next_t = 0.0;
+    for k in 0..t.len() {
+        if let Some(normal) = normals[k] {
+            held = normal;
+        }
+        let at = t[k] - t[0];
+        if at + 1e-9 >= next_t || k + 1 == t.len() {
+            let frame = match (x - held * x.dot(&held)).try_normalize(1e-6) {
+                Some(x) => CompliantFrame::from_axes(position[k], x, held.cross(&x), held),
+                None => CompliantFrame::z_aligned(position[k], &held),
+            };
+            let pose = Isometry3::from_parts(frame.origin_m.into(), frame.orientation);
+            poses.push(FramePose::from_isometry(FrameKind::Planar, &pose, Some(at)));
+            next_t = at + FRAME_SAMPLE_PERIOD_S;
+        }
+    }
+    poses
 }
 
 /// The friction coefficient of a segment and its forces without that friction.
@@ -271,4 +503,73 @@ fn without_friction(t: &[f64], position: &[Vector3<f64>], force: &[Vector3<f64>]
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// Samples 1 ms apart of a tool stroking back and forth over `height(x)` along x (±10 cm,
+    /// 16 cm/s at most) with a 5 mm sideways bow, pushing `normal(x)` (into the surface) plus tremor-like noise.
+    fn strokes(
+        height: impl Fn(f64) -> f64,
+        normal: impl Fn(f64, f64) -> Vector3<f64>,
+    ) -> (Vec<f64>, Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+        let mut rng = SplitMix64::new(7);
+        let (mut t, mut position, mut force) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..8000 {
+            let time = k as f64 * 1e-3;
+            let phase = 0.5 * std::f64::consts::PI * time;
+            let x = 0.1 * phase.sin();
+            let y = 0.005 * (3.0 * phase).sin();
+            let n = normal(x, time);
+            t.push(time);
+            position.push(Vector3::new(x, y, height(x)));
+            // The force on the tool: the surface's push back (against `n`), 0.3 N of noise.
+            force.push(-n * 8.0 + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3);
+        }
+        (t, position, force)
+    }
+
+    #[test]
+    fn a_drum_crown_is_curved_and_its_normals_are_measured() {
+        // A drum of radius 0.15 m under the path, axis along y: ±42° of arc.
+        let radius: f64 = 0.15;
+        let (t, position, force) = strokes(
+            |x| (radius * radius - x * x).sqrt(),
+            |x, _| -Vector3::new(x, 0.0, (radius * radius - x * x).sqrt()).normalize(),
+        );
+        let normals = measured_normals(&t, &position, &force);
+        let spread = normal_spread(&normals, &position).expect("enough sliding samples");
+        assert!(spread.curved(), "{spread:?}");
+        assert!(spread.about_mean_rad.to_degrees() > 25.0, "{spread:?}");
+        // Each measured normal lies within 2° of the drum's.
+        for (k, normal) in normals.iter().enumerate() {
+            if let Some(normal) = normal {
+                let p = position[k];
+                let truth = -Vector3::new(p.x, 0.0, p.z).normalize();
+                assert!(
+                    normal.angle(&truth).to_degrees() < 2.0,
+                    "sample {k}: {normal:?} for {truth:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_hand_leaning_on_a_flat_part_is_not_a_curved_surface() {
+        // The force leans ±20° along y in time, at 0.7 Hz; the path is a plane.
+        let (t, position, force) = strokes(
+            |_| 0.3,
+            |_, time| {
+                let lean = 20f64.to_radians() * (2.0 * std::f64::consts::PI * 0.7 * time).sin();
+                Vector3::new(0.0, lean.sin(), -lean.cos())
+            },
+        );
+        let normals = measured_normals(&t, &position, &force);
+        let spread = normal_spread(&normals, &position).expect("enough sliding samples");
+        assert!(spread.about_mean_rad > CURVED_SPREAD_RAD, "the force turns: {spread:?}");
+        assert!(!spread.curved(), "but the path does not: {spread:?}");
+    }
 }

@@ -109,7 +109,9 @@ pub fn learn_skill(
     for decl in &plan.frames {
         let frame = learner.frame(decl)?;
         let segment_start_s = match &decl.source {
-            ir::FrameSource::ForceAlignedSamples { segment } => demo.t_s[segments[segment.index()].start],
+            ir::FrameSource::ForceAlignedSamples { segment } | ir::FrameSource::Constraint { segment, .. } => {
+                demo.t_s[segments[segment.index()].start]
+            }
             _ => 0.0,
         };
         learner.frames.push((frame.clone(), segment_start_s));

@@ -92,6 +92,11 @@ fn a_wipe_over_a_curved_part_learns_its_normal_force_and_reproduces() {
         // normal under the demonstrated tip at that time.
         let check = &learned.quality.normals["surface"];
         assert!(check.follows_surface, "{case}: {check:?}");
+        assert!(
+            learned.demo.warnings.iter().all(|w| !w.contains("friction cone")),
+            "{case}: no warning about the plane not learned: {:?}",
+            learned.demo.warnings
+        );
         let LearnedFrame::Samples(poses) = &learned.frames["surface"] else {
             panic!("{case}: a frame per sample")
         };

@@ -57,6 +57,7 @@ impl Learner<'_> {
                 let mut frame = chosen.frame;
                 let mut following = None;
                 if matches!(chosen.kind, ConstraintKind::Planar | ConstraintKind::PointOnPlane) {
+                    let warned = self.warnings.len();
                     if let Some((mut check, checked)) = self.check_normal(&decl.name, segment.index(), &frame) {
                         frame = checked;
                         if chosen.kind == ConstraintKind::Planar {
@@ -72,6 +73,9 @@ impl Learner<'_> {
                             check.spread_deg = spread.map(|s| s.about_mean_rad.to_degrees());
                             check.unexplained_deg = spread.map(|s| s.about_shape_rad.to_degrees());
                             if spread.is_some_and(NormalSpread::curved) {
+                                // The plane is not the surface: its check's warning (a normal
+                                // outside the friction cone) is about a frame not learned.
+                                self.warnings.truncate(warned);
                                 check.follows_surface = true;
                                 following = Some(surface_frames(
                                     &demo.t_s[range.clone()],

@@ -3,7 +3,7 @@
 //! the phase learned within 15 % of its applied median and say which phase; `--phase N` picks
 //! another and an absent phase is refused; noisy presses (0.2 mm position noise) put the
 //! contact frame within 3° of the true normal and the press's boundaries within 50 ms of the
-//! truth on average (60 ms at worst); touches put the frame within 3°.
+//! truth (20 ms on average); touches put the frame within 3°.
 
 use std::path::PathBuf;
 
@@ -176,9 +176,10 @@ fn frame_error_deg(learned: &Learned, generated: &Demonstration) -> f64 {
 
 #[test]
 fn noisy_presses_have_their_frame_within_3_degrees_and_boundaries_within_50_ms() {
+    const SEEDS: u64 = 32;
     let press = skill("press");
     let (mut worst_angle, mut worst_boundary, mut boundary_sum): (f64, f64, f64) = (0.0, 0.0, 0.0);
-    for seed in 0..8u64 {
+    for seed in 0..SEEDS {
         let variation = Variation {
             position_noise_m: 0.0002,
             tilt_rad: [0.0, 0.1, -0.15, 0.2][seed as usize % 4],
@@ -212,18 +213,21 @@ fn noisy_presses_have_their_frame_within_3_degrees_and_boundaries_within_50_ms()
         worst_boundary * 1e3
     );
     assert!(worst_angle < 3.0, "frame {worst_angle}°");
-    // The press's force rises as a minimum-jerk curve from zero (8 N·10u³ is 7 mN 40 ms in):
-    // the onset fit lands 0-56 ms from it, 35 ms on average (docs/method.md §3).
-    let mean_boundary = boundary_sum / 16.0;
-    assert!(mean_boundary < 0.05, "mean boundary error {mean_boundary} s");
-    assert!(worst_boundary < 0.06, "boundary {worst_boundary} s");
+    // The press's force rises as a minimum-jerk curve from zero (8 N·10u³ is 7 mN 40 ms in),
+    // which the onset fit's minimum-jerk shapes extrapolate back to (docs/method.md §3); a power
+    // law alone put these boundaries 34 ms off on average and 100 ms at worst. Seed 19's wrench
+    // was read as sensor axes (the button's travel along the tool's axis taken for sliding) and
+    // its frame was 10.7° off.
+    let mean_boundary = boundary_sum / (2.0 * SEEDS as f64);
+    assert!(mean_boundary < 0.02, "mean boundary error {mean_boundary} s");
+    assert!(worst_boundary < 0.05, "boundary {worst_boundary} s");
 }
 
 #[test]
 fn noisy_touches_have_their_frame_within_3_degrees() {
     let touch = skill("touch");
     let mut worst: f64 = 0.0;
-    for seed in 0..8u64 {
+    for seed in 0..32u64 {
         let variation = Variation {
             position_noise_m: 0.0002,
             rate_hz: if seed % 2 == 0 { 1000.0 } else { 250.0 },

@@ -48,8 +48,12 @@ const MAX_BIAS_SHARE: f64 = 0.5;
 const CONTACT_SHARE: f64 = 0.25;
 /// The least force in contact \[N\].
 const CONTACT_N: f64 = 2.0;
-/// Faster than this, a sample in contact is sliding \[m/s\].
+/// Faster than this, a sample in contact is sliding \[m/s\] ...
 const MOVING_M_S: f64 = 0.01;
+/// ... when its travel is at least this far from the tool's axis \[°\]: a tool moving along
+/// its own axis is pressing in or lifting off, and its force lies along the travel (`asin(f̂ · v̂)`
+/// near ±90°, both signs in one press) whatever the frame, which says nothing about friction.
+const SLIDING_FROM_AXIS_DEG: f64 = 45.0;
 /// Fewest samples a statistic is computed on.
 const MIN_SAMPLES: usize = 20;
 /// A frame wins when its statistic is at most this share of the other's ...
@@ -281,10 +285,16 @@ fn detect_frame(demo: &Demo, force: &[Vector3<f64>], motion: &Motion, declared: 
     let peak = force.iter().map(|f| f.norm()).fold(0.0, f64::max);
     let threshold = CONTACT_N.max(CONTACT_SHARE * peak);
     let contact: Vec<usize> = (0..force.len()).filter(|&k| force[k].norm() >= threshold).collect();
+    // The tool's axis is the flange's z in the base frame whatever the columns' frame.
+    let across_axis = SLIDING_FROM_AXIS_DEG.to_radians().cos();
     let moving: Vec<usize> = contact
         .iter()
         .copied()
-        .filter(|&k| motion.velocity[k].norm() >= MOVING_M_S)
+        .filter(|&k| {
+            let v = motion.velocity[k];
+            let axis = demo.orientation[k] * Vector3::z();
+            v.norm() >= MOVING_M_S && v.normalize().dot(&axis).abs() <= across_axis
+        })
         .collect();
     // The force at sample k read as base axes (`None`) or as sensor axes turned by `turn`.
     let in_base = |k: usize, turn: Option<f64>| match turn {

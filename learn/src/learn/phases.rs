@@ -14,8 +14,9 @@
 //!    `off = on / 2`; phases shorter than [`MIN_PHASE_S`] are dropped, and gaps shorter than
 //!    [`MIN_GAP_S`] are closed.
 //! 3. A phase's onset is where its force left zero: along the phase's mean force direction the
-//!    rise up to half the phase's median level is fitted by `a (t − t₀)₊ᵖ` (`p` from 1 to 3,
-//!    `t₀` on every sample of the second before the crossing); the release likewise, mirrored.
+//!    rise up to 70 % of the phase's median is fitted by `a · shape(t − t₀)` over three
+//!    families of [`Rise`] shapes (powers, minimum-jerk steps, first-order approaches), `t₀` on
+//!    every sample of the second before the crossing; the release likewise, mirrored.
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -34,10 +35,19 @@ pub const MIN_PHASE_S: f64 = 0.08;
 pub const MIN_GAP_S: f64 = 0.15;
 /// How far before the threshold crossing an onset is looked for \[s\].
 const ONSET_SEARCH_S: f64 = 1.0;
-/// The powers of the onset model `a (t − t₀)₊ᵖ`.
+/// The powers of the onset shape `(t − t₀)₊ᵖ`.
 const ONSET_POWERS: [f64; 8] = [1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0];
+/// The durations of the minimum-jerk and first-order onset shapes: this many, spaced
+/// geometrically from [`RISE_SHORTEST_S`] to [`RISE_LONGEST_S`].
+const RISE_DURATIONS: usize = 24;
+/// The shortest rise the onset shapes describe \[s\].
+const RISE_SHORTEST_S: f64 = 0.03;
+/// The longest rise the onset shapes describe \[s\].
+const RISE_LONGEST_S: f64 = 3.0;
+/// The onset fit uses at most about this many samples of the rise (every k-th of a long one).
+const ONSET_FIT_SAMPLES: usize = 300;
 /// The onset fit covers the rise up to this share of the phase's median force.
-const ONSET_LEVEL: f64 = 0.3;
+const ONSET_LEVEL: f64 = 0.7;
 /// The first in-contact window starts this long after the on-threshold crossing \[s\].
 pub const WINDOW_START_S: f64 = 0.02;
 /// ... and ends this long after it \[s\].
@@ -246,10 +256,49 @@ fn phase_direction(demo: &Demo, phase: &ContactPhase) -> Vector3<f64> {
     sum.try_normalize(1e-12).unwrap_or_else(Vector3::z)
 }
 
+/// How a force leaves zero at `t₀`, as a function of the time since, up to its amplitude.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Rise {
+    /// `(t − t₀)ᵖ`: a ramp (`p = 1`) or a rise whose first derivatives vanish at the onset.
+    Power(f64),
+    /// The minimum-jerk step from rest to rest over this long: how a hand brings a force up.
+    MinimumJerk(f64),
+    /// `1 − e^(−(t − t₀)/τ)`: a first-order approach, as a compliant contact under a steady push.
+    FirstOrder(f64),
+}
+
+impl Rise {
+    /// Every shape the onset fit tries.
+    fn all() -> impl Iterator<Item = Rise> {
+        let ratio = (RISE_LONGEST_S / RISE_SHORTEST_S).powf(1.0 / (RISE_DURATIONS - 1) as f64);
+        let durations = (0..RISE_DURATIONS).map(move |k| RISE_SHORTEST_S * ratio.powi(k as i32));
+        ONSET_POWERS
+            .into_iter()
+            .map(Rise::Power)
+            .chain(durations.clone().map(Rise::MinimumJerk))
+            .chain(durations.map(Rise::FirstOrder))
+    }
+
+    /// The shape `since` seconds after the onset (zero before it).
+    fn at(self, since: f64) -> f64 {
+        if since <= 0.0 {
+            return 0.0;
+        }
+        match self {
+            Rise::Power(p) => since.powf(p),
+            Rise::MinimumJerk(duration) => {
+                let u = (since / duration).min(1.0);
+                u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+            }
+            Rise::FirstOrder(tau) => 1.0 - (-since / tau).exp(),
+        }
+    }
+}
+
 /// Where the force along the phase's direction left zero before `crossing` (`release`: where it
 /// came back to zero after it), searched no farther than `bound`: the least-squares fit of
-/// `a (t − t₀)₊ᵖ` (zero before `t₀`) to the samples from the search start to where the force
-/// first reaches `level`.
+/// `a · shape(t − t₀)` (zero before `t₀`) to the samples from the search start to where the force
+/// first reaches `level`, over every [`Rise`] shape; the best fit's `t₀`.
 fn edge(demo: &Demo, along: &[f64], crossing: usize, bound: usize, level: f64, release: bool) -> usize {
     let n = along.len();
     let search = samples_in(demo, ONSET_SEARCH_S).max(2);
@@ -285,48 +334,53 @@ fn edge(demo: &Demo, along: &[f64], crossing: usize, bound: usize, level: f64, r
     if window.len() < 4 {
         return crossing.min(n);
     }
-    // The force far from the contact (what debiasing left) is the zero of the model.
+    // The force far from the contact (what debiasing left) is the model's zero.
+    let quarter = window.len() / 4;
     let far: Vec<f64> = if release {
-        window.iter().rev().take(window.len() / 4).map(|&k| along[k]).collect()
+        window.iter().rev().take(quarter).map(|&k| along[k]).collect()
     } else {
-        window.iter().take(window.len() / 4).map(|&k| along[k]).collect()
+        window.iter().take(quarter).map(|&k| along[k]).collect()
     };
     let zero = if far.is_empty() {
         0.0
     } else {
         far.iter().sum::<f64>() / far.len() as f64
     };
-    let along: Vec<f64> = along.iter().map(|y| y - zero).collect();
-    let along = &along;
+    // The force is averaged over 20 ms already: every k-th sample of a long rise says as much.
+    let stride = (window.len() / ONSET_FIT_SAMPLES).max(1);
     // Time measured from the contact outwards is mirrored for a release so one fit serves both.
     let time = |k: usize| if release { -demo.t_s[k] } else { demo.t_s[k] };
+    let fitted: Vec<(f64, f64)> = window
+        .iter()
+        .step_by(stride)
+        .map(|&k| (time(k), along[k] - zero))
+        .collect();
+    let syy: f64 = fitted.iter().map(|(_, y)| y * y).sum();
     let candidates: Vec<usize> = if release {
         (crossing.min(n - 1)..to).collect()
     } else {
         (from..=crossing.min(n - 1)).collect()
     };
-    // Coarse to fine over the candidates: every `step`-th, then every one around the best.
+    // The residual of the best shape with its least-squares amplitude, for an onset at `candidate`.
     let fit = |candidate: usize| -> f64 {
         let t0 = time(candidate);
-        let mut best = f64::INFINITY;
-        for p in ONSET_POWERS {
-            let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-            for &k in &window {
-                let x = (time(k) - t0).max(0.0).powf(p);
-                let y = along[k];
-                sx += x;
-                sy += y;
-                sxx += x * x;
-                sxy += x * y;
-                syy += y * y;
-            }
-            // y = a x by least squares, y measured from the baseline before the search.
-            let _ = (sx, sy);
-            let sse = if sxx > 1e-300 { syy - sxy * sxy / sxx } else { syy };
-            best = best.min(sse);
-        }
-        best
+        Rise::all()
+            .map(|shape| {
+                let (mut sxx, mut sxy) = (0.0, 0.0);
+                for &(t, y) in &fitted {
+                    let x = shape.at(t - t0);
+                    sxx += x * x;
+                    sxy += x * y;
+                }
+                if sxx > 1e-300 {
+                    syy - sxy * sxy / sxx
+                } else {
+                    syy
+                }
+            })
+            .fold(f64::INFINITY, f64::min)
     };
+    // Coarse to fine over the candidates: every `step`-th, then every one around the best.
     let step = (candidates.len() / 100).max(1);
     let coarse = candidates
         .iter()
@@ -343,8 +397,11 @@ fn edge(demo: &Demo, along: &[f64], crossing: usize, bound: usize, level: f64, r
         .map(|&c| (fit(c), c))
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .map_or(centre, |(_, c)| c);
-    let best = (0.0, if release { best + 1 } else { best });
-    best.1.min(n)
+    if release {
+        (best + 1).min(n)
+    } else {
+        best.min(n)
+    }
 }
 
 /// The samples of a phase's first in-contact window: from [`WINDOW_START_S`] to
@@ -460,6 +517,46 @@ mod tests {
         assert_eq!(found.longest(&demo), Some(1));
         let window = phase_window(&found.phases, 1, demo.len());
         assert!(window.start > found.phases[0].release && window.end < found.phases[2].onset);
+    }
+
+    #[test]
+    fn smooth_rises_have_their_onsets_where_the_force_left_zero() {
+        // A threshold crossing lies 150-300 ms inside these contacts; a power law alone put the
+        // minimum-jerk onset about 40 ms late.
+        let minimum_jerk = |u: f64| {
+            let u = u.clamp(0.0, 1.0);
+            u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
+        };
+        let first_order = |since: f64| 1.0 - (-since.max(0.0) / 0.15).exp();
+        let cases: [(&str, Box<dyn Fn(f64) -> f64>, f64, f64); 2] = [
+            (
+                "minimum jerk over 0.9 s",
+                Box::new(move |t| 8.0 * (minimum_jerk((t - 2.0) / 0.9) - minimum_jerk((t - 4.0) / 0.9))),
+                2.0,
+                4.9,
+            ),
+            (
+                "first order, τ = 0.15 s",
+                Box::new(move |t| 8.0 * first_order(t - 2.0).min(first_order(4.5 - t))),
+                2.0,
+                4.5,
+            ),
+        ];
+        for (name, force, onset, release) in cases {
+            let demo = demo_with(force, 7.0, 1000.0);
+            let found = contact_phases(&demo);
+            assert_eq!(found.phases.len(), 1, "{name}: {found:?}");
+            let phase = found.phases[0];
+            let (got_onset, got_release) = (demo.t_s[phase.onset], demo.t_s[phase.release - 1]);
+            assert!(
+                (got_onset - onset).abs() < 0.025,
+                "{name}: onset {got_onset} for {onset}"
+            );
+            assert!(
+                (got_release - release).abs() < 0.025,
+                "{name}: release {got_release} for {release}"
+            );
+        }
     }
 
     #[test]

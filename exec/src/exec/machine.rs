@@ -1074,7 +1074,12 @@ impl<'b, 'a> Machine<'b, 'a> {
                     profile_rate(sensed.force_lag_n).min(travel.unwrap_or(1.0))
                 }
             };
-            profile.step(dmp, dt * rate);
+            // A profile ends at its duration and holds its last value: past it, without the
+            // learned term, a force that dropped steeply would swing on (a contour's 0.6 N end
+            // to -22 N) while a guard or a slowed motion keeps the state.
+            if profile.time_s() < profile.tau_s() {
+                profile.step(dmp, dt * rate);
+            }
         }
         Ok(())
     }

@@ -867,3 +867,28 @@ fn a_parameter_inside_arithmetic_is_found_hovered_and_renamed() {
     let edits: usize = edit.changes.iter().flat_map(|c| c.values()).map(Vec::len).sum();
     assert_eq!(edits, 3);
 }
+
+#[test]
+fn the_keyword_since_is_hovered_and_its_capture_found() {
+    let text = include_str!("../compiler/tests/corpus/ok/captures.skill");
+    let name = "/mem/captures.skill";
+    let mut engine = Engine::in_memory();
+    engine.open(name, text);
+    let hover = |position: Position| match engine.hover(name, position).map(|h| h.contents) {
+        Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
+        other => format!("{other:?}"),
+    };
+    let keyword = hover(at(text, "since found", 0, 2, Encoding::Utf16));
+    assert!(keyword.contains("capture NAME"), "hover on `since`: {keyword}");
+    assert!(
+        keyword.contains("rather than from where the state was entered"),
+        "{keyword}"
+    );
+    // The name after it is still the capture's, with its own hover.
+    let capture = hover(at(text, "since found", 0, 7, Encoding::Utf16));
+    assert!(
+        !capture.contains("rather than from where"),
+        "hover on the capture: {capture}"
+    );
+    assert!(capture.contains("found"), "{capture}");
+}

@@ -353,6 +353,8 @@ pub enum GuardKind {
         axis: Option<AxisRef>,
         /// `since NAME`: measured from the pose `capture NAME` kept instead of the entry.
         since: Option<Ident>,
+        /// Where the keyword `since` was written (for hover).
+        since_keyword: Option<Span>,
         /// The comparison.
         op: CmpOp,
         /// The right-hand side: a length, or an angle for a rotation axis.

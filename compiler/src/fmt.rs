@@ -424,7 +424,9 @@ pub fn guard(g: &Guard) -> String {
                 expr(rhs)
             )
         }
-        GuardKind::Moved { axis, since, op, rhs } => {
+        GuardKind::Moved {
+            axis, since, op, rhs, ..
+        } => {
             let axis = axis.as_ref().map_or(String::new(), |axis| {
                 format!("({}.{})", axis.frame.name, axis.axis.name)
             });

@@ -791,13 +791,23 @@ fn guard(pair: Pair<'_, Rule>) -> Guard {
                 Some(Rule::axis_ref) => Some(axis_ref(inner.next().expect("peeked"))),
                 _ => None,
             };
-            let since = match inner.peek().map(Pair::as_rule) {
-                Some(Rule::since_clause) => inner.next().expect("peeked").into_inner().nth(1).map(ident),
-                _ => None,
+            let (since, since_keyword) = match inner.peek().map(Pair::as_rule) {
+                Some(Rule::since_clause) => {
+                    let mut clause = inner.next().expect("peeked").into_inner();
+                    let keyword = clause.next().map(|k| span_of(&k));
+                    (clause.next().map(ident), keyword)
+                }
+                _ => (None, None),
             };
             let (op, rhs) = comparison(&mut inner);
             Guard {
-                kind: GuardKind::Moved { axis, since, op, rhs },
+                kind: GuardKind::Moved {
+                    axis,
+                    since,
+                    since_keyword,
+                    op,
+                    rhs,
+                },
                 span,
             }
         }

@@ -123,6 +123,7 @@ pub fn describe(analysis: &Analysis, occurrence: &Occurrence) -> Option<String> 
             let meaning = match *word {
                 "watch" => "the guard watches for a limit (a safety stop) and expects no contact: it fires as any guard, but a force in it does not slow the state's motion as an approach to a contact would",
                 "once" => "the capture is taken at the first entry only: while the name holds no pose yet; a loop's later passes keep it",
+                "since" => "`moved since NAME` compares the tool point's distance from the position `capture NAME` kept, rather than from where the state was entered; a distance, not along an axis, and false while the run has not captured NAME",
                 _ => return None,
             };
             let _ = writeln!(out, "```skill\n{word}\n```\n{meaning}.");

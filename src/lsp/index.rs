@@ -592,9 +592,18 @@ impl SkillWalk<'_> {
                 self.refer(&axis.frame, &[Kind::Frame]);
                 self.value(rhs);
             }
-            GuardKind::Moved { axis, since, rhs, .. } => {
+            GuardKind::Moved {
+                axis,
+                since,
+                since_keyword,
+                rhs,
+                ..
+            } => {
                 if let Some(axis) = axis {
                     self.refer(&axis.frame, &[Kind::Frame]);
+                }
+                if let Some(span) = since_keyword {
+                    self.index.note(self.file, *span, What::Keyword("since"));
                 }
                 if let Some(since) = since {
                     self.refer(since, &[Kind::Capture]);

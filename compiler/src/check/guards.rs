@@ -64,6 +64,7 @@ impl Checker<'_> {
                 axis,
                 op,
                 rhs,
+                ..
             } => {
                 if let Some(axis) = axis {
                     let diag = self

@@ -962,3 +962,69 @@ fn broken_arithmetic_is_an_error_never_a_panic() {
         }
     }
 }
+
+/// A skill whose parameters' defaults use the parameters declared before them.
+const DERIVED: &str = "skill s {\n    param hold = 4 s\n    param settle = hold / 4\n    param depth = 12 mm\n    param back = [0 mm, 0 mm, 5 mm]\n    param again = back\n    param rise = -(depth + 3 mm)\n    learn {\n        segments = max_force\n        motion m = dmp(segment 1)\n    }\n    state a {\n        move m\n        on moved >= -rise -> d\n        on dwell settle -> d\n        on motion_done -> b\n    }\n    state b {\n        capture found\n        move m at found + again in tool\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
+
+#[test]
+fn a_default_uses_the_parameters_declared_before_it_and_follows_their_settings() {
+    let value = |compiled: &Compilation, name: &str| {
+        let program = compiled
+            .program
+            .as_ref()
+            .unwrap_or_else(|| panic!("{:?}", compiled.diags));
+        let skill = &program.skills[0];
+        let param = skill.params.iter().find(|p| p.name == name).expect("declared");
+        (param.value_si, param.vector_si)
+    };
+    let defaults = compile_with(DERIVED, &[]);
+    assert!((value(&defaults, "settle").0 - 1.0).abs() < 1e-12);
+    assert!((value(&defaults, "rise").0 + 0.015).abs() < 1e-12);
+    assert_eq!(value(&defaults, "again").1, Some([0.0, 0.0, 0.005]));
+    // `hold` and `back` are used only by other defaults: no "never used" warning for them.
+    assert!(
+        !defaults.diags.iter().any(|d| d.code == Code::Unused),
+        "{:?}",
+        defaults.diags
+    );
+    // Setting the parameter a default uses moves the default with it, unless it is set too.
+    let set = compile_with(DERIVED, &["hold=10 s", "depth=2 cm"]);
+    assert!((value(&set, "settle").0 - 2.5).abs() < 1e-12);
+    assert!((value(&set, "rise").0 + 0.023).abs() < 1e-12);
+    let both = compile_with(DERIVED, &["hold=10 s", "settle=1 s"]);
+    assert!((value(&both, "settle").0 - 1.0).abs() < 1e-12);
+    // The dwell and the guard take the derived values.
+    let ir: Value = serde_json::to_value(&set.program.as_ref().expect("compiles").skills[0]).expect("serialises");
+    let at = |pointer: &str| ir.pointer(pointer).and_then(Value::as_f64).unwrap_or(f64::NAN);
+    assert!((at("/transitions/0/guard/value_m") - 0.023).abs() < 1e-12, "{ir}");
+    assert!((at("/transitions/1/guard/duration_s") - 2.5).abs() < 1e-12, "{ir}");
+}
+
+#[test]
+fn a_default_that_uses_itself_or_a_later_parameter_is_refused_naming_it() {
+    for (text, message) in [
+        (
+            DERIVED.replace("param settle = hold / 4", "param settle = settle / 4"),
+            "the default of `settle` uses itself",
+        ),
+        (
+            DERIVED.replace("param settle = hold / 4", "param settle = depth / 1 mm * 1 s"),
+            "the default of `settle` uses `depth`, which is declared after it",
+        ),
+    ] {
+        let compiled = compile_with(&text, &[]);
+        assert!(compiled.program.is_none());
+        let diag = compiled
+            .diags
+            .iter()
+            .find(|d| d.message == message)
+            .unwrap_or_else(|| panic!("{message}: {:?}", compiled.diags));
+        assert!(
+            diag.help.as_deref().unwrap_or("").contains("declared above it"),
+            "{diag:?}"
+        );
+    }
+    // A default whose arithmetic a setting breaks names the setting.
+    let compiled = compile_with(DERIVED, &["depth=3"]);
+    assert!(compiled.program.is_none(), "a plain number for a length is refused");
+}

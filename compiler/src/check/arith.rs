@@ -138,7 +138,7 @@ fn evaluate(expr: &ast::Expr) -> Result<Value, ArithError> {
                 format!("`{}` is not a parameter of this skill", name.name),
                 "not a number",
                 "arithmetic takes numbers, quantities and the skill's parameters \
-                 (a parameter's default: numbers and quantities only)",
+                 (in a parameter's default, the parameters declared before it)",
             ))
         }
         other => {

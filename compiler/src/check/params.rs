@@ -90,6 +90,9 @@ struct Bound<'s> {
     shape: Shape,
     value: ast::Expr,
     source: ir::ParamSource,
+    /// The default as written when it names parameters declared before it: evaluated again
+    /// with their values once settings are applied.
+    template: Option<ast::Expr>,
 }
 
 impl Checker<'_> {
@@ -107,6 +110,14 @@ impl Checker<'_> {
         let values: HashMap<&str, &ast::Expr> = bound.iter().map(|b| (b.decl.name.name.as_str(), &b.value)).collect();
         let mut body = skill.clone();
         let mut used: HashMap<String, bool> = values.keys().map(|name| (name.to_string(), false)).collect();
+        // A parameter another's default uses is used.
+        for template in bound.iter().filter_map(|b| b.template.as_ref()) {
+            visit_names(template, &mut |name| {
+                if let Some(flag) = used.get_mut(&name.name) {
+                    *flag = true;
+                }
+            });
+        }
         self.params_in_learn(&body, &values);
         let mut unfolded = Vec::new();
         substitute_body(&mut body, &values, &mut used, &mut unfolded);
@@ -220,6 +231,14 @@ impl Checker<'_> {
                 continue;
             }
             let mut value = decl.value.clone();
+            let Some(template) = self.earlier_params_in(decl, skill, &bound) else {
+                continue;
+            };
+            if template.is_some() {
+                let earlier: HashMap<&str, &ast::Expr> =
+                    bound.iter().map(|b| (b.decl.name.name.as_str(), &b.value)).collect();
+                substitute(&mut value, &earlier, &mut HashMap::new());
+            }
             if !self.fold_reporting(&mut value) {
                 continue;
             }
@@ -262,6 +281,7 @@ impl Checker<'_> {
                 shape,
                 value,
                 source: ir::ParamSource::Default,
+                template,
             });
         }
         for setting in settings {
@@ -320,7 +340,90 @@ impl Checker<'_> {
             slot.value = value;
             slot.source = setting.source.clone();
         }
+        // Defaults that use earlier parameters follow the values those were set to.
+        for index in 0..bound.len() {
+            let Some(template) = bound[index].template.as_ref() else {
+                continue;
+            };
+            if !matches!(bound[index].source, ir::ParamSource::Default) {
+                continue;
+            }
+            let mut value = template.clone();
+            let earlier: HashMap<&str, &ast::Expr> = bound[..index]
+                .iter()
+                .map(|b| (b.decl.name.name.as_str(), &b.value))
+                .collect();
+            substitute(&mut value, &earlier, &mut HashMap::new());
+            if !self.fold_reporting(&mut value) {
+                continue;
+            }
+            if Shape::of(&value) != Some(bound[index].shape) || !finite_literal(&value) {
+                let decl = bound[index].decl;
+                let set: Vec<String> = bound[..index]
+                    .iter()
+                    .filter(|b| !matches!(b.source, ir::ParamSource::Default))
+                    .map(|b| format!("`{}` = {}", b.decl.name.name, crate::fmt::expr_text(&b.value)))
+                    .collect();
+                let diag = self
+                    .diag(
+                        Code::UnitMismatch,
+                        decl.value.span,
+                        format!(
+                            "with {}, the default of `{}` is not {}",
+                            set.join(", "),
+                            decl.name.name,
+                            bound[index].shape.describe()
+                        ),
+                        "its default",
+                    )
+                    .help("set the parameters its default uses to values of the kinds they were declared with");
+                self.report(diag);
+                continue;
+            }
+            bound[index].value = value;
+        }
         (self.error_count() == errors_before).then_some(bound)
+    }
+
+    /// Whether `decl`'s default names parameters: `Some(Some(default))` when it names only
+    /// parameters declared before it (`bound`), `Some(None)` when it names none, and `None`
+    /// (reported) when it names itself or one declared after it, which would make a cycle
+    /// possible.
+    fn earlier_params_in(
+        &mut self,
+        decl: &ast::ParamDecl,
+        skill: &ast::Skill,
+        bound: &[Bound<'_>],
+    ) -> Option<Option<ast::Expr>> {
+        let mut names = Vec::new();
+        visit_names(&decl.value, &mut |name| names.push(name.clone()));
+        let mut uses_earlier = false;
+        let mut fine = true;
+        for name in names {
+            if bound.iter().any(|b| b.decl.name.name == name.name) {
+                uses_earlier = true;
+                continue;
+            }
+            let problem = if name.name == decl.name.name {
+                format!("the default of `{}` uses itself", decl.name.name)
+            } else if skill.params.iter().any(|p| p.name.name == name.name) {
+                format!(
+                    "the default of `{}` uses `{}`, which is declared after it",
+                    decl.name.name, name.name
+                )
+            } else {
+                continue;
+            };
+            let diag = self
+                .diag(Code::BadArgument, name.span, problem, "not declared before")
+                .help(format!(
+                    "a default may use the parameters declared above it: declare `{}` before `{}`, or write a value",
+                    name.name, decl.name.name
+                ));
+            self.report(diag);
+            fine = false;
+        }
+        fine.then(|| uses_earlier.then(|| decl.value.clone()))
     }
 
     /// Reports a parameter used inside `learn`, where it is not substituted: what is learned

@@ -1028,3 +1028,31 @@ fn a_default_that_uses_itself_or_a_later_parameter_is_refused_naming_it() {
     let compiled = compile_with(DERIVED, &["depth=3"]);
     assert!(compiled.program.is_none(), "a plain number for a length is refused");
 }
+
+#[test]
+fn a_vector_parameter_is_negated_scaled_and_summed_where_an_offset_stands() {
+    let text = "skill s {\n    param back = [0 mm, 0 mm, 5 mm]\n    param twice = 2 * -back + [1 mm, 0 mm, 0 mm]\n    learn {\n        segments = max_force\n        motion m = dmp(segment 1)\n    }\n    state a {\n        capture found\n        move m\n        on motion_done -> b\n    }\n    state b {\n        move m at found + -back / 2 in tool\n        on motion_done -> c\n    }\n    state c {\n        move m at found + twice\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
+    let compiled = compile_with(text, &["back=[0 mm, 1 cm, 0 mm]"]);
+    let program = compiled.program.unwrap_or_else(|| panic!("{:?}", compiled.diags));
+    let ir: Value = serde_json::to_value(&program.skills[0]).expect("serialises");
+    let offset = |state: usize| -> Vec<f64> {
+        let pointer = format!("/states/{state}/kind/motion_at_offset/offset_m");
+        let items = ir
+            .pointer(&pointer)
+            .and_then(Value::as_array)
+            .unwrap_or_else(|| panic!("{ir}"));
+        items.iter().map(|v| v.as_f64().unwrap_or(f64::NAN)).collect()
+    };
+    // `2 in tool`: a number before `in` is no quantity of unit "in".
+    assert_eq!(offset(1), [0.0, -0.005, 0.0]);
+    // The derived default follows the setting: 2 · -[0, 10, 0] mm + [1, 0, 0] mm.
+    assert_eq!(offset(2), [0.001, -0.02, 0.0]);
+    // A list plus a length is refused, naming both.
+    let compiled = compile_with(&text.replace("+ twice", "+ twice + 2 mm"), &[]);
+    let diag = compiled
+        .diags
+        .iter()
+        .find(|d| d.code == Code::BadArithmetic)
+        .unwrap_or_else(|| panic!("{:?}", compiled.diags));
+    assert_eq!(diag.message, "adds a list of 3 values and a length");
+}

@@ -25,6 +25,8 @@ enum Value {
         dim: Dim,
         unit: &'static str,
     },
+    /// A list of numbers or quantities (`[0 mm, 0 mm, 5 mm]`), computed component by component.
+    Vector(Vec<Value>),
 }
 
 impl Value {
@@ -32,6 +34,14 @@ impl Value {
         match self {
             Value::Number(_) => "a plain number",
             Value::Quantity { dim, .. } => dim.describe(),
+            Value::Vector(_) => "a list",
+        }
+    }
+
+    fn finite(&self) -> bool {
+        match self {
+            Value::Number(v) | Value::Quantity { si: v, .. } => v.is_finite(),
+            Value::Vector(items) => items.iter().all(Value::finite),
         }
     }
 }
@@ -120,10 +130,25 @@ fn evaluate(expr: &ast::Expr) -> Result<Value, ArithError> {
                 unit: name,
             }
         }
-        ExprKind::Neg(inner) => match evaluate(inner)? {
-            Value::Number(v) => Value::Number(-v),
-            Value::Quantity { si, dim, unit } => Value::Quantity { si: -si, dim, unit },
-        },
+        ExprKind::Neg(inner) => negate(evaluate(inner)?),
+        ExprKind::List(items) => {
+            let mut values = Vec::with_capacity(items.len());
+            for item in items {
+                match evaluate(item)? {
+                    Value::Vector(_) => {
+                        return Err(ArithError::new(
+                            Code::BadArithmetic,
+                            item.span,
+                            "arithmetic on a list of lists".to_string(),
+                            "a list inside a list",
+                            "a list's items are numbers or quantities",
+                        ))
+                    }
+                    value => values.push(value),
+                }
+            }
+            Value::Vector(values)
+        }
         ExprKind::Arith { first, rest } => {
             let mut value = evaluate(first)?;
             for (op, operand) in rest {
@@ -151,10 +176,7 @@ fn evaluate(expr: &ast::Expr) -> Result<Value, ArithError> {
             ))
         }
     };
-    let finite = match value {
-        Value::Number(v) | Value::Quantity { si: v, .. } => v.is_finite(),
-    };
-    if !finite {
+    if !value.finite() {
         return Err(ArithError::new(
             Code::OutOfRange,
             expr.span,
@@ -166,10 +188,86 @@ fn evaluate(expr: &ast::Expr) -> Result<Value, ArithError> {
     Ok(value)
 }
 
+fn negate(value: Value) -> Value {
+    match value {
+        Value::Number(v) => Value::Number(-v),
+        Value::Quantity { si, dim, unit } => Value::Quantity { si: -si, dim, unit },
+        Value::Vector(items) => Value::Vector(items.into_iter().map(negate).collect()),
+    }
+}
+
 /// `lhs op rhs`, where the expression so far starts at byte `start` and `rhs` is at `rhs_span`.
+/// Lists combine component by component: a list `±` a list of as many items, a list scaled by
+/// or divided by a plain number.
 fn combine(op: BinOp, lhs: Value, rhs: Value, start: usize, rhs_span: Span) -> Result<Value, ArithError> {
-    use Value::{Number, Quantity};
+    use Value::{Number, Vector};
     let whole = Span::new(start, rhs_span.end);
+    match (op, lhs, rhs) {
+        (BinOp::Add | BinOp::Sub, Vector(a), Vector(b)) if a.len() == b.len() => {
+            let items = a
+                .into_iter()
+                .zip(b)
+                .map(|(x, y)| combine(op, x, y, start, rhs_span))
+                .collect::<Result<_, _>>()?;
+            return Ok(Vector(items));
+        }
+        (BinOp::Mul, Vector(items), k @ Number(_)) | (BinOp::Mul, k @ Number(_), Vector(items)) => {
+            let items = items
+                .into_iter()
+                .map(|x| combine(op, x, k.clone(), start, rhs_span))
+                .collect::<Result<_, _>>()?;
+            return Ok(Vector(items));
+        }
+        (BinOp::Div, Vector(items), k @ Number(_)) => {
+            let items = items
+                .into_iter()
+                .map(|x| combine(op, x, k.clone(), start, rhs_span))
+                .collect::<Result<_, _>>()?;
+            return Ok(Vector(items));
+        }
+        (op, lhs @ Vector(_), rhs) | (op, lhs, rhs @ Vector(_)) => {
+            let (message, help) = match op {
+                BinOp::Add | BinOp::Sub => (
+                    format!(
+                        "{} {} and {}",
+                        if op == BinOp::Add { "adds" } else { "subtracts" },
+                        describe_sized(&lhs),
+                        describe_sized(&rhs)
+                    ),
+                    "add or subtract lists of as many items, component by component",
+                ),
+                BinOp::Mul => (
+                    format!("multiplies {} by {}", describe_sized(&lhs), describe_sized(&rhs)),
+                    "scale a list by a plain number: `2 * back`",
+                ),
+                BinOp::Div => (
+                    format!("divides {} by {}", describe_sized(&lhs), describe_sized(&rhs)),
+                    "divide a list by a plain number: `back / 2`",
+                ),
+            };
+            return Err(ArithError::new(
+                Code::BadArithmetic,
+                whole,
+                message,
+                "not component by component",
+                help,
+            ));
+        }
+        (_, lhs, rhs) => combine_scalars(op, lhs, rhs, whole, rhs_span),
+    }
+}
+
+/// A value's description with a list's length: `a list of 3 values`.
+fn describe_sized(value: &Value) -> String {
+    match value {
+        Value::Vector(items) => format!("a list of {} values", items.len()),
+        other => other.describe().to_string(),
+    }
+}
+
+/// `lhs op rhs` for two numbers or quantities; `whole` spans the expression so far.
+fn combine_scalars(op: BinOp, lhs: Value, rhs: Value, whole: Span, rhs_span: Span) -> Result<Value, ArithError> {
+    use Value::{Number, Quantity};
     let mismatch = |lhs: &Value, rhs: &Value, verb: &str| {
         ArithError::new(
             Code::UnitMismatch,
@@ -218,7 +316,7 @@ fn combine(op: BinOp, lhs: Value, rhs: Value, start: usize, rhs_span: Span) -> R
         BinOp::Div => {
             let divisor = match &rhs {
                 Number(b) => *b,
-                Quantity { .. } => {
+                Quantity { .. } | Value::Vector(_) => {
                     return Err(ArithError::new(
                         Code::BadArithmetic,
                         whole,
@@ -244,6 +342,8 @@ fn combine(op: BinOp, lhs: Value, rhs: Value, start: usize, rhs_span: Span) -> R
                     dim,
                     unit,
                 },
+                // Lists never get here: `combine` takes them apart first.
+                vector @ Value::Vector(_) => vector,
             }
         }
     };
@@ -253,13 +353,23 @@ fn combine(op: BinOp, lhs: Value, rhs: Value, start: usize, rhs_span: Span) -> R
 /// The literal of a folded value, in the unit the value carries.
 fn literal(value: &Value, span: Span) -> ExprKind {
     match *value {
+        Value::Vector(ref items) => ExprKind::List(
+            items
+                .iter()
+                .map(|item| ast::Expr {
+                    kind: literal(item, span),
+                    span,
+                })
+                .collect(),
+        ),
         Value::Number(v) => ExprKind::Number(ast::Number {
-            text: number_text(v),
-            value: v,
+            text: number_text(v + 0.0),
+            value: v + 0.0,
         }),
         Value::Quantity { si, unit, .. } => {
             let factor = units::lookup(unit).map_or(1.0, |(_, factor)| factor);
-            let v = si / factor;
+            // `-[0 mm, 0 mm, 5 mm]` has no -0 mm.
+            let v = si / factor + 0.0;
             ExprKind::Quantity {
                 number: ast::Number {
                     text: number_text(v),
@@ -419,6 +529,71 @@ mod tests {
             folded(bin(BinOp::Add, name, q(1.0, "mm"))).unwrap_err(),
             Code::BadArithmetic
         );
+    }
+
+    fn list(items: Vec<Expr>) -> Expr {
+        Expr {
+            kind: ExprKind::List(items),
+            span: span(),
+        }
+    }
+
+    /// The folded list's items in SI, or the error's code.
+    fn folded_list(mut expr: Expr) -> Result<Vec<f64>, Code> {
+        fold(&mut expr).map_err(|e| e.code)?;
+        let ExprKind::List(items) = &expr.kind else {
+            panic!("a list: {expr:?}")
+        };
+        Ok(items
+            .iter()
+            .map(|item| match &item.kind {
+                ExprKind::Quantity { number, unit } => number.value * units::lookup(&unit.name).expect("a unit").1,
+                ExprKind::Number(number) => number.value,
+                other => panic!("{other:?}"),
+            })
+            .collect())
+    }
+
+    #[test]
+    fn lists_negate_add_and_scale_component_by_component() {
+        let back = || list(vec![q(0.0, "mm"), q(1.0, "cm"), q(5.0, "mm")]);
+        let neg = Expr {
+            kind: ExprKind::Neg(Box::new(back())),
+            span: span(),
+        };
+        assert_eq!(folded_list(neg), Ok(vec![0.0, -0.01, -0.005]));
+        let sum = bin(BinOp::Add, back(), list(vec![q(1.0, "mm"), q(0.0, "m"), q(-5.0, "mm")]));
+        let sum = folded_list(sum).unwrap();
+        assert!((sum[0] - 0.001).abs() < 1e-15 && (sum[1] - 0.01).abs() < 1e-15 && sum[2].abs() < 1e-15);
+        assert_eq!(folded_list(bin(BinOp::Mul, n(2.0), back())), Ok(vec![0.0, 0.02, 0.01]));
+        assert_eq!(
+            folded_list(bin(BinOp::Div, back(), n(2.0))),
+            Ok(vec![0.0, 0.005, 0.0025])
+        );
+        // What is not component by component, or mixes dimensions within a component.
+        let pair = || list(vec![q(1.0, "mm"), q(1.0, "mm")]);
+        for (expr, code) in [
+            (bin(BinOp::Add, back(), q(2.0, "mm")), Code::BadArithmetic),
+            (bin(BinOp::Mul, back(), back()), Code::BadArithmetic),
+            (bin(BinOp::Mul, q(2.0, "mm"), back()), Code::BadArithmetic),
+            (bin(BinOp::Div, n(2.0), back()), Code::BadArithmetic),
+            (bin(BinOp::Sub, back(), pair()), Code::BadArithmetic),
+            (bin(BinOp::Div, back(), n(0.0)), Code::BadArithmetic),
+            (
+                bin(BinOp::Add, back(), list(vec![q(1.0, "mm"), q(1.0, "N"), q(1.0, "mm")])),
+                Code::UnitMismatch,
+            ),
+            (
+                list(vec![q(1.0, "mm"), bin(BinOp::Add, pair(), pair())]),
+                Code::BadArithmetic,
+            ),
+        ] {
+            let wrapped = Expr {
+                kind: ExprKind::Neg(Box::new(expr)),
+                span: span(),
+            };
+            assert_eq!(folded_list(wrapped).err(), Some(code));
+        }
     }
 
     #[test]

@@ -201,59 +201,48 @@ fn negate(value: Value) -> Value {
 /// or divided by a plain number.
 fn combine(op: BinOp, lhs: Value, rhs: Value, start: usize, rhs_span: Span) -> Result<Value, ArithError> {
     use Value::{Number, Vector};
-    let whole = Span::new(start, rhs_span.end);
+    let each = |pairs: Vec<(Value, Value)>| -> Result<Value, ArithError> {
+        let items = pairs
+            .into_iter()
+            .map(|(x, y)| combine(op, x, y, start, rhs_span))
+            .collect::<Result<_, _>>()?;
+        Ok(Vector(items))
+    };
     match (op, lhs, rhs) {
-        (BinOp::Add | BinOp::Sub, Vector(a), Vector(b)) if a.len() == b.len() => {
-            let items = a
-                .into_iter()
-                .zip(b)
-                .map(|(x, y)| combine(op, x, y, start, rhs_span))
-                .collect::<Result<_, _>>()?;
-            return Ok(Vector(items));
+        (BinOp::Add | BinOp::Sub, Vector(a), Vector(b)) if a.len() == b.len() => each(a.into_iter().zip(b).collect()),
+        (BinOp::Mul | BinOp::Div, Vector(items), k @ Number(_)) => {
+            each(items.into_iter().map(|x| (x, k.clone())).collect())
         }
-        (BinOp::Mul, Vector(items), k @ Number(_)) | (BinOp::Mul, k @ Number(_), Vector(items)) => {
-            let items = items
-                .into_iter()
-                .map(|x| combine(op, x, k.clone(), start, rhs_span))
-                .collect::<Result<_, _>>()?;
-            return Ok(Vector(items));
-        }
-        (BinOp::Div, Vector(items), k @ Number(_)) => {
-            let items = items
-                .into_iter()
-                .map(|x| combine(op, x, k.clone(), start, rhs_span))
-                .collect::<Result<_, _>>()?;
-            return Ok(Vector(items));
-        }
+        (BinOp::Mul, k @ Number(_), Vector(items)) => each(items.into_iter().map(|x| (k.clone(), x)).collect()),
         (op, lhs @ Vector(_), rhs) | (op, lhs, rhs @ Vector(_)) => {
+            let (lhs, rhs) = (describe_sized(&lhs), describe_sized(&rhs));
             let (message, help) = match op {
-                BinOp::Add | BinOp::Sub => (
-                    format!(
-                        "{} {} and {}",
-                        if op == BinOp::Add { "adds" } else { "subtracts" },
-                        describe_sized(&lhs),
-                        describe_sized(&rhs)
-                    ),
-                    "add or subtract lists of as many items, component by component",
+                BinOp::Add => (
+                    format!("adds {lhs} and {rhs}"),
+                    "add lists of as many items, component by component",
+                ),
+                BinOp::Sub => (
+                    format!("subtracts {lhs} and {rhs}"),
+                    "subtract lists of as many items, component by component",
                 ),
                 BinOp::Mul => (
-                    format!("multiplies {} by {}", describe_sized(&lhs), describe_sized(&rhs)),
+                    format!("multiplies {lhs} by {rhs}"),
                     "scale a list by a plain number: `2 * back`",
                 ),
                 BinOp::Div => (
-                    format!("divides {} by {}", describe_sized(&lhs), describe_sized(&rhs)),
+                    format!("divides {lhs} by {rhs}"),
                     "divide a list by a plain number: `back / 2`",
                 ),
             };
-            return Err(ArithError::new(
+            Err(ArithError::new(
                 Code::BadArithmetic,
-                whole,
+                Span::new(start, rhs_span.end),
                 message,
                 "not component by component",
                 help,
-            ));
+            ))
         }
-        (_, lhs, rhs) => combine_scalars(op, lhs, rhs, whole, rhs_span),
+        (_, lhs, rhs) => combine_scalars(op, lhs, rhs, Span::new(start, rhs_span.end), rhs_span),
     }
 }
 

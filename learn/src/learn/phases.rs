@@ -528,7 +528,8 @@ mod tests {
             u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
         };
         let first_order = |since: f64| 1.0 - (-since.max(0.0) / 0.15).exp();
-        let cases: [(&str, Box<dyn Fn(f64) -> f64>, f64, f64); 2] = [
+        type Force = Box<dyn Fn(f64) -> f64>;
+        let cases: [(&str, Force, f64, f64); 2] = [
             (
                 "minimum jerk over 0.9 s",
                 Box::new(move |t| 8.0 * (minimum_jerk((t - 2.0) / 0.9) - minimum_jerk((t - 4.0) / 0.9))),

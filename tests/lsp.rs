@@ -892,3 +892,19 @@ fn the_keyword_since_is_hovered_and_its_capture_found() {
     );
     assert!(capture.contains("found"), "{capture}");
 }
+
+#[test]
+fn a_parameter_inside_another_parameters_default_is_found_and_renamed() {
+    let text = "skill s {\n    param hold = 4 s\n    param settle = hold / 4\n    learn {\n        segments = max_force\n        motion m = dmp(segment 1)\n    }\n    state a {\n        move m\n        on dwell settle -> d\n        on motion_done -> d\n    }\n    terminal d: success\n}\n";
+    let name = "/mem/derived.skill";
+    let mut engine = Engine::in_memory();
+    engine.open(name, text);
+    let declared = at(text, "hold = 4 s", 0, 0, Encoding::Utf16);
+    let found = engine
+        .definition(name, at(text, "hold / 4", 0, 1, Encoding::Utf16))
+        .expect("a definition");
+    assert_eq!(found.range.start, declared);
+    let edit = engine.rename(name, declared, "pause").expect("renames");
+    let edits: usize = edit.changes.iter().flat_map(|c| c.values()).map(Vec::len).sum();
+    assert_eq!(edits, 2, "the declaration and the use in `settle`'s default");
+}

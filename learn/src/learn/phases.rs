@@ -15,7 +15,7 @@
 //!    [`MIN_GAP_S`] are closed.
 //! 3. A phase's onset is where its force left zero: along the phase's mean force direction the
 //!    rise up to 70 % of the phase's median is fitted by `a · shape(t − t₀)` over three
-//!    families of [`Rise`] shapes (powers, minimum-jerk steps, first-order approaches), `t₀` on
+//!    families of rise shapes (powers, minimum-jerk steps, first-order approaches), `t₀` on
 //!    every sample of the second before the crossing; the release likewise, mirrored.
 
 use nalgebra::Vector3;

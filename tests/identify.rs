@@ -1,7 +1,7 @@
 //! `skillc identify` (issue 26, item 4): every shipped demonstration is identified as its own
 //! skill (through the CLI, text and JSON), and at least 95 of 100 generated variants (other
-//! rates, position noise, durations, tilts, wipes of several passes) are; the confusion table
-//! is printed.
+//! rates, position noise, durations, tilts, wipes of several passes, wipes over a curved part)
+//! are; the confusion table is printed.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -95,6 +95,7 @@ fn generated_variants_are_identified_95_times_in_100() {
     let tilts = [0.0, 0.1, -0.15, 0.2];
     let mut confusion = vec![vec![0usize; TEMPLATES.len()]; StdSkill::ALL.len()];
     let mut misses = Vec::new();
+    let mut curved = 0;
     for index in 0..100usize {
         let skill = StdSkill::ALL[index % StdSkill::ALL.len()];
         let variation = Variation {
@@ -107,8 +108,14 @@ fn generated_variants_are_identified_95_times_in_100() {
             rate_hz: rates[(index / 3) % rates.len()],
             time_scale: scales[(index / 5) % scales.len()],
             tilt_rad: tilts[(index / 7) % tilts.len()],
-            curve_deg: 0.0,
+            // One wipe in three is a single pass over a curved part (a fender), ±20-60°.
+            curve_deg: if skill == StdSkill::Wipe && (index / 9) % 3 == 0 {
+                [20.0, 35.0, 45.0, 60.0][(index / 27) % 4]
+            } else {
+                0.0
+            },
         };
+        curved += usize::from(variation.curve_deg > 0.0);
         let generated = generate_varied(skill, 1000 + index as u64, &variation);
         let name = format!("{}#{index}", skill.name());
         let demo = demo_of(&generated.samples, name.clone());
@@ -137,5 +144,6 @@ fn generated_variants_are_identified_95_times_in_100() {
         .map(|(row, skill)| confusion[row][TEMPLATES.iter().position(|t| *t == skill.name()).expect("known")])
         .sum();
     eprintln!("{table}\n{right} of 100 right\n{}", misses.join("\n"));
+    assert_eq!(curved, 4, "four of the wipes are fender wipes over ±20, 35, 45 and 60°");
     assert!(right >= 95, "{right} of 100 right:\n{table}\n{}", misses.join("\n"));
 }

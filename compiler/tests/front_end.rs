@@ -1024,7 +1024,16 @@ fn a_default_that_uses_itself_or_a_later_parameter_is_refused_naming_it() {
             "{diag:?}"
         );
     }
-    // A default whose arithmetic a setting breaks names the setting.
+    // A default that uses an earlier parameter refused on its own says nothing more about it.
+    let compiled = compile_with(&DERIVED.replace("param hold = 4 s", "param hold = \"4 s\""), &[]);
+    assert!(compiled.program.is_none());
+    let messages: Vec<&str> = compiled.diags.iter().map(|d| d.message.as_str()).collect();
+    assert!(
+        messages.iter().any(|m| m.contains("parameter `hold` needs a number")),
+        "{messages:?}"
+    );
+    assert!(!messages.iter().any(|m| m.contains("declared after")), "{messages:?}");
+    // A plain number for a length is refused.
     let compiled = compile_with(DERIVED, &["depth=3"]);
     assert!(compiled.program.is_none(), "a plain number for a length is refused");
 }

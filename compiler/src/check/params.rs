@@ -404,15 +404,20 @@ impl Checker<'_> {
                 uses_earlier = true;
                 continue;
             }
-            let problem = if name.name == decl.name.name {
-                format!("the default of `{}` uses itself", decl.name.name)
-            } else if skill.params.iter().any(|p| p.name.name == name.name) {
-                format!(
+            let position = |wanted: &str| skill.params.iter().position(|p| p.name.name == wanted);
+            let problem = match (position(&name.name), position(&decl.name.name)) {
+                // Not a parameter: the arithmetic's check names it.
+                (None, _) => continue,
+                _ if name.name == decl.name.name => format!("the default of `{}` uses itself", decl.name.name),
+                (Some(at), Some(mine)) if at < mine => {
+                    // An earlier parameter that was refused: its own error says why.
+                    fine = false;
+                    continue;
+                }
+                _ => format!(
                     "the default of `{}` uses `{}`, which is declared after it",
                     decl.name.name, name.name
-                )
-            } else {
-                continue;
+                ),
             };
             let diag = self
                 .diag(Code::BadArgument, name.span, problem, "not declared before")

@@ -41,7 +41,12 @@ fn pos(needle: &str, nth: usize, skip: usize) -> Position {
 }
 
 fn hover_text(engine: &Engine, position: Position) -> String {
-    match engine.hover(ROOT, position).map(|h| h.contents) {
+    hover_text_in(engine, ROOT, position)
+}
+
+/// The hover's text at `position` in the document `name`.
+fn hover_text_in(engine: &Engine, name: &str, position: Position) -> String {
+    match engine.hover(name, position).map(|h| h.contents) {
         Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
         other => format!("{other:?}"),
     }
@@ -853,15 +858,9 @@ fn a_parameter_inside_arithmetic_is_found_hovered_and_renamed() {
     }
     let references = engine.references(name, declared, true);
     assert_eq!(references.len(), 3, "the declaration and two uses: {references:?}");
-    let hover = match engine.hover(name, here("hold / 2", 0)).map(|h| h.contents) {
-        Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
-        other => format!("{other:?}"),
-    };
+    let hover = hover_text_in(&engine, name, here("hold / 2", 0));
     assert!(hover.contains("2 s"), "the default is shown: {hover}");
-    let watch = match engine.hover(name, here("watch force", 1)).map(|h| h.contents) {
-        Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
-        other => format!("{other:?}"),
-    };
+    let watch = hover_text_in(&engine, name, here("watch force", 1));
     assert!(watch.contains("expects no contact"), "hover on `watch`: {watch}");
     let edit = engine.rename(name, declared, "margin").expect("renames");
     let edits: usize = edit.changes.iter().flat_map(|c| c.values()).map(Vec::len).sum();
@@ -874,10 +873,7 @@ fn the_keyword_since_is_hovered_and_its_capture_found() {
     let name = "/mem/captures.skill";
     let mut engine = Engine::in_memory();
     engine.open(name, text);
-    let hover = |position: Position| match engine.hover(name, position).map(|h| h.contents) {
-        Some(lsp_types::HoverContents::Markup(markup)) => markup.value,
-        other => format!("{other:?}"),
-    };
+    let hover = |position: Position| hover_text_in(&engine, name, position);
     let keyword = hover(at(text, "since found", 0, 2, Encoding::Utf16));
     assert!(keyword.contains("capture NAME"), "hover on `since`: {keyword}");
     assert!(

@@ -90,9 +90,17 @@ struct Bound<'s> {
     shape: Shape,
     value: ast::Expr,
     source: ir::ParamSource,
-    /// The default as written when it names parameters declared before it: evaluated again
-    /// with their values once settings are applied.
-    template: Option<ast::Expr>,
+    /// Whether the default names parameters declared before it: it is evaluated again with
+    /// their values once settings are applied.
+    derived: bool,
+}
+
+/// `default` with the values of the parameters `earlier` substituted for their names.
+fn with_earlier(default: &ast::Expr, earlier: &[Bound<'_>]) -> ast::Expr {
+    let values: HashMap<&str, &ast::Expr> = earlier.iter().map(|b| (b.decl.name.name.as_str(), &b.value)).collect();
+    let mut value = default.clone();
+    substitute(&mut value, &values, &mut HashMap::new());
+    value
 }
 
 impl Checker<'_> {
@@ -111,8 +119,8 @@ impl Checker<'_> {
         let mut body = skill.clone();
         let mut used: HashMap<String, bool> = values.keys().map(|name| (name.to_string(), false)).collect();
         // A parameter another's default uses is used.
-        for template in bound.iter().filter_map(|b| b.template.as_ref()) {
-            visit_names(template, &mut |name| {
+        for derived in bound.iter().filter(|b| b.derived) {
+            visit_names(&derived.decl.value, &mut |name| {
                 if let Some(flag) = used.get_mut(&name.name) {
                     *flag = true;
                 }
@@ -230,15 +238,14 @@ impl Checker<'_> {
                 self.report(diag);
                 continue;
             }
-            let mut value = decl.value.clone();
-            let Some(template) = self.earlier_params_in(decl, skill, &bound) else {
+            let Some(derived) = self.earlier_params_in(decl, skill, &bound) else {
                 continue;
             };
-            if template.is_some() {
-                let earlier: HashMap<&str, &ast::Expr> =
-                    bound.iter().map(|b| (b.decl.name.name.as_str(), &b.value)).collect();
-                substitute(&mut value, &earlier, &mut HashMap::new());
-            }
+            let mut value = if derived {
+                with_earlier(&decl.value, &bound)
+            } else {
+                decl.value.clone()
+            };
             if !self.fold_reporting(&mut value) {
                 continue;
             }
@@ -281,7 +288,7 @@ impl Checker<'_> {
                 shape,
                 value,
                 source: ir::ParamSource::Default,
-                template,
+                derived,
             });
         }
         for setting in settings {
@@ -342,18 +349,10 @@ impl Checker<'_> {
         }
         // Defaults that use earlier parameters follow the values those were set to.
         for index in 0..bound.len() {
-            let Some(template) = bound[index].template.as_ref() else {
-                continue;
-            };
-            if !matches!(bound[index].source, ir::ParamSource::Default) {
+            if !bound[index].derived || !matches!(bound[index].source, ir::ParamSource::Default) {
                 continue;
             }
-            let mut value = template.clone();
-            let earlier: HashMap<&str, &ast::Expr> = bound[..index]
-                .iter()
-                .map(|b| (b.decl.name.name.as_str(), &b.value))
-                .collect();
-            substitute(&mut value, &earlier, &mut HashMap::new());
+            let mut value = with_earlier(&bound[index].decl.value, &bound[..index]);
             if !self.fold_reporting(&mut value) {
                 continue;
             }
@@ -385,16 +384,11 @@ impl Checker<'_> {
         (self.error_count() == errors_before).then_some(bound)
     }
 
-    /// Whether `decl`'s default names parameters: `Some(Some(default))` when it names only
-    /// parameters declared before it (`bound`), `Some(None)` when it names none, and `None`
-    /// (reported) when it names itself or one declared after it, which would make a cycle
-    /// possible.
-    fn earlier_params_in(
-        &mut self,
-        decl: &ast::ParamDecl,
-        skill: &ast::Skill,
-        bound: &[Bound<'_>],
-    ) -> Option<Option<ast::Expr>> {
+    /// Whether `decl`'s default names parameters: `Some(true)` when it names only parameters
+    /// declared before it (`bound`), `Some(false)` when it names none, and `None` (reported)
+    /// when it names itself or one declared after it, which would make a cycle possible, or
+    /// an earlier one that was refused.
+    fn earlier_params_in(&mut self, decl: &ast::ParamDecl, skill: &ast::Skill, bound: &[Bound<'_>]) -> Option<bool> {
         let mut names = Vec::new();
         visit_names(&decl.value, &mut |name| names.push(name.clone()));
         let mut uses_earlier = false;
@@ -428,7 +422,7 @@ impl Checker<'_> {
             self.report(diag);
             fine = false;
         }
-        fine.then(|| uses_earlier.then(|| decl.value.clone()))
+        fine.then_some(uses_earlier)
     }
 
     /// Reports a parameter used inside `learn`, where it is not substituted: what is learned

@@ -361,11 +361,13 @@ fn edge(demo: &Demo, along: &[f64], crossing: usize, bound: usize, level: f64, r
     } else {
         (from..=crossing.min(n - 1)).collect()
     };
+    let shapes: Vec<Rise> = Rise::all().collect();
     // The residual of the best shape with its least-squares amplitude, for an onset at `candidate`.
     let fit = |candidate: usize| -> f64 {
         let t0 = time(candidate);
-        Rise::all()
-            .map(|shape| {
+        shapes
+            .iter()
+            .map(|&shape| {
                 let (mut sxx, mut sxy) = (0.0, 0.0);
                 for &(t, y) in &fitted {
                     let x = shape.at(t - t0);

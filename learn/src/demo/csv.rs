@@ -172,16 +172,17 @@ struct LineCounter<'t> {
     text: &'t str,
     /// The byte up to which newlines have been counted.
     byte: usize,
-    /// Newlines in `text[..byte]`.
+    /// Lines of the file before `text`, plus newlines in `text[..byte]`.
     newlines: usize,
 }
 
 impl<'t> LineCounter<'t> {
-    fn new(text: &'t str) -> Self {
+    /// Counts the lines of `text`, whose first line is the file's line `first_line`.
+    fn new(text: &'t str, first_line: usize) -> Self {
         Self {
             text,
             byte: 0,
-            newlines: 0,
+            newlines: first_line - 1,
         }
     }
 
@@ -251,6 +252,225 @@ fn number(text: &str, delimiter: u8) -> Option<f64> {
     })
 }
 
+/// Pieces of at least this many bytes are read side by side (a minute at 1 kHz is about 5 MB).
+const PIECE_MIN_BYTES: usize = 1 << 20;
+
+/// At most this many pieces.
+const MAX_PIECES: usize = 4;
+
+/// How a file's rows are laid out: its name for messages, its separator, where each of
+/// [`COLUMNS`] is and how many fields a row has.
+struct Layout<'a> {
+    file: &'a str,
+    delimiter: u8,
+    columns: &'a [usize; 14],
+    fields: usize,
+}
+
+/// The samples read from a piece of a file's body, with the line each came from.
+struct Rows {
+    demo: Demo,
+    lines: Vec<usize>,
+    normalised: Normalised,
+}
+
+impl Rows {
+    fn with_capacity(file: &str, capacity: usize) -> Self {
+        Self {
+            demo: Demo {
+                source: file.to_owned(),
+                t_s: Vec::with_capacity(capacity),
+                position_m: Vec::with_capacity(capacity),
+                orientation: Vec::with_capacity(capacity),
+                force_n: Vec::with_capacity(capacity),
+                torque_nm: Vec::with_capacity(capacity),
+            },
+            lines: Vec::with_capacity(capacity),
+            normalised: Normalised::default(),
+        }
+    }
+
+    /// Reads the rows of `text`, the file from line `first_line` on, through `reader`, stopping
+    /// at the first bad row.
+    fn read(
+        &mut self,
+        reader: &mut ::csv::Reader<&[u8]>,
+        text: &str,
+        first_line: usize,
+        layout: &Layout<'_>,
+    ) -> Result<(), DemoError> {
+        let file = layout.file;
+        let mut lines = LineCounter::new(text, first_line);
+        let mut record = ::csv::ByteRecord::new();
+        let mut values = [0.0f64; 14];
+        while reader
+            .read_byte_record(&mut record)
+            .map_err(|err| malformed(file, first_line - 1, &err))?
+        {
+            if is_blank(&record) {
+                continue;
+            }
+            let row = lines.line_of(record.position().map_or(0, |p| p.byte() as usize));
+            if record.len() != layout.fields {
+                return Err(DemoError::Ragged {
+                    file: file.to_owned(),
+                    row,
+                    expected: layout.fields,
+                    found: record.len(),
+                });
+            }
+            for ((value, &idx), column) in values.iter_mut().zip(layout.columns).zip(COLUMNS) {
+                // Fields cut from a `str` at ASCII separators are UTF-8.
+                let text = std::str::from_utf8(record.get(idx).unwrap_or_default())
+                    .unwrap_or_default()
+                    .trim();
+                let parsed = number(text, layout.delimiter).ok_or_else(|| DemoError::NotANumber {
+                    file: file.to_owned(),
+                    row,
+                    column: column.to_owned(),
+                    text: text.to_owned(),
+                })?;
+                if !parsed.is_finite() {
+                    return Err(DemoError::NonFinite {
+                        file: file.to_owned(),
+                        row,
+                        column: column.to_owned(),
+                        text: text.to_owned(),
+                    });
+                }
+                *value = parsed;
+            }
+            self.push(values, row)?;
+        }
+        Ok(())
+    }
+
+    /// Adds the sample of one row, read from line `row`.
+    fn push(&mut self, values: [f64; 14], row: usize) -> Result<(), DemoError> {
+        let [t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz] = values;
+        if let Some(&previous_s) = self.demo.t_s.last() {
+            if t <= previous_s {
+                return Err(DemoError::TimeNotIncreasing {
+                    file: self.demo.source.clone(),
+                    row,
+                    t_s: t,
+                    previous_s,
+                });
+            }
+        }
+        let raw = Quaternion::new(qw, qx, qy, qz);
+        let norm = raw.norm();
+        if norm < 1e-9 {
+            return Err(DemoError::ZeroQuaternion {
+                file: self.demo.source.clone(),
+                row,
+            });
+        }
+        self.normalised.note(norm, row);
+        self.demo.t_s.push(t);
+        self.demo.position_m.push(Vector3::new(px, py, pz));
+        self.demo.orientation.push(UnitQuaternion::from_quaternion(raw));
+        self.demo.force_n.push(Vector3::new(fx, fy, fz));
+        self.demo.torque_nm.push(Vector3::new(mx, my, mz));
+        self.lines.push(row);
+        Ok(())
+    }
+
+    /// Appends the rows of the piece after this one: the error of the first bad row, in the
+    /// file's order (a later piece's first time must still follow this piece's last).
+    fn append(&mut self, later: Piece) -> Result<(), DemoError> {
+        let Piece { rows, error } = later;
+        if let (Some(&previous_s), Some(&t_s)) = (self.demo.t_s.last(), rows.demo.t_s.first()) {
+            if t_s <= previous_s {
+                return Err(DemoError::TimeNotIncreasing {
+                    file: self.demo.source.clone(),
+                    row: rows.lines[0],
+                    t_s,
+                    previous_s,
+                });
+            }
+        }
+        if let Some(error) = error {
+            return Err(error);
+        }
+        let Rows {
+            demo,
+            lines,
+            normalised,
+        } = rows;
+        self.demo.t_s.extend(demo.t_s);
+        self.demo.position_m.extend(demo.position_m);
+        self.demo.orientation.extend(demo.orientation);
+        self.demo.force_n.extend(demo.force_n);
+        self.demo.torque_nm.extend(demo.torque_nm);
+        self.lines.extend(lines);
+        self.normalised.merge(&normalised);
+        Ok(())
+    }
+}
+
+/// What reading one piece of a body gave: its rows up to the first bad one, and that row's error.
+struct Piece {
+    rows: Rows,
+    error: Option<DemoError>,
+}
+
+/// Reads the rows of `text`, the file from line `first_line` on.
+fn read_piece(mut reader: ::csv::Reader<&[u8]>, text: &str, first_line: usize, layout: &Layout<'_>) -> Piece {
+    let mut rows = Rows::with_capacity(layout.file, newlines(text.as_bytes()) + 1);
+    let error = rows.read(&mut reader, text, first_line, layout).err();
+    Piece { rows, error }
+}
+
+/// How many pieces to read a body of `bytes` in: one per core, at most [`MAX_PIECES`], each at
+/// least [`PIECE_MIN_BYTES`].
+fn piece_count(bytes: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    cores.min(MAX_PIECES).min(bytes / PIECE_MIN_BYTES).max(1)
+}
+
+/// `body` cut into at most `count` pieces, each but the last ending with a newline. A body
+/// with a double quote stays whole: a quoted field may hold a newline, and a cut there would
+/// split a row.
+fn pieces_of(body: &str, count: usize) -> Vec<&str> {
+    if count <= 1 || body.as_bytes().contains(&b'"') {
+        return vec![body];
+    }
+    let bytes = body.as_bytes();
+    let mut pieces = Vec::with_capacity(count);
+    let mut start = 0;
+    for k in 1..count {
+        let target = (bytes.len() * k / count).max(start);
+        let Some(offset) = bytes[target..].iter().position(|&b| b == b'\n') else {
+            break;
+        };
+        let end = target + offset + 1;
+        pieces.push(&body[start..end]);
+        start = end;
+    }
+    pieces.push(&body[start..]);
+    pieces
+}
+
+/// Newlines in `bytes`.
+fn newlines(bytes: &[u8]) -> usize {
+    bytes.iter().filter(|&&b| b == b'\n').count()
+}
+
+/// Whether a row is blank: no fields but spaces.
+fn is_blank(record: &::csv::ByteRecord) -> bool {
+    record.iter().all(|field| field.trim_ascii().is_empty())
+}
+
+/// The error of a row the `csv` crate could not read, its line counted on from `lines_before`.
+fn malformed(file: &str, lines_before: usize, err: &::csv::Error) -> DemoError {
+    let line = err.position().map_or(0, |p| lines_before + p.line() as usize);
+    DemoError::Io {
+        file: file.to_owned(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, format!("line {line}: {err}")),
+    }
+}
+
 /// Parses and validates demonstration CSV `text`; `file` names it in messages.
 pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded, DemoError> {
     parse_csv_as(file, text, options, &Dialect::default())
@@ -259,6 +479,17 @@ pub fn parse_csv(file: &str, text: &str, options: &ReadOptions) -> Result<Loaded
 /// Parses and validates demonstration CSV `text` written in `dialect`; `file` names it in
 /// messages.
 pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dialect) -> Result<Loaded, DemoError> {
+    parse_in_pieces(file, text, options, dialect, piece_count(text.len()))
+}
+
+/// [`parse_csv_as`], the body read in at most `pieces` pieces side by side.
+fn parse_in_pieces<'t>(
+    file: &str,
+    text: &'t str,
+    options: &ReadOptions,
+    dialect: &Dialect,
+    pieces: usize,
+) -> Result<Loaded, DemoError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let wrench = declarations(file, text)?;
     let header_line = text
@@ -269,38 +500,33 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
         return Err(DemoError::Empty { file: file.to_owned() });
     };
     let delimiter = dialect.delimiter.unwrap_or_else(|| detect_delimiter(header_line));
-    let mut reader = ::csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .delimiter(delimiter)
-        .comment(Some(b'#'))
-        .trim(::csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let malformed = |err: ::csv::Error| {
-        let line = err.position().map_or(0, ::csv::Position::line);
-        DemoError::Io {
-            file: file.to_owned(),
-            source: std::io::Error::new(std::io::ErrorKind::InvalidData, format!("line {line}: {err}")),
+    let reader = |text: &'t str| {
+        ::csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .delimiter(delimiter)
+            .comment(Some(b'#'))
+            .from_reader(text.as_bytes())
+    };
+    // The header is the first row that is not blank; the body starts on the line after it.
+    let mut head = reader(text);
+    let mut record = ::csv::ByteRecord::new();
+    let header = loop {
+        if !head
+            .read_byte_record(&mut record)
+            .map_err(|err| malformed(file, 0, &err))?
+        {
+            return Err(DemoError::Empty { file: file.to_owned() });
+        }
+        if !is_blank(&record) {
+            break record.clone();
         }
     };
-    let mut records = reader.records();
-    let mut lines = LineCounter::new(text);
-    // Rows of spaces only are blank lines too.
-    let mut next_row = || -> Result<Option<(usize, ::csv::StringRecord)>, DemoError> {
-        for record in records.by_ref() {
-            let record = record.map_err(&malformed)?;
-            if record.iter().all(str::is_empty) {
-                continue;
-            }
-            let byte = record.position().map_or(0, |p| p.byte() as usize);
-            return Ok(Some((lines.line_of(byte), record)));
-        }
-        Ok(None)
-    };
-    let Some((_, header)) = next_row()? else {
-        return Err(DemoError::Empty { file: file.to_owned() });
-    };
-    let names: Vec<String> = header.iter().map(|name| name.trim().to_owned()).collect();
+    let body_start = (head.position().byte() as usize).min(text.len());
+    let names: Vec<String> = header
+        .iter()
+        .map(|name| String::from_utf8_lossy(name).trim().to_owned())
+        .collect();
     for (idx, name) in names.iter().enumerate() {
         if names[..idx].contains(name) && COLUMNS.contains(&name.as_str()) {
             return Err(DemoError::DuplicateColumn {
@@ -313,72 +539,47 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
         file: file.to_owned(),
         columns,
     })?;
-
-    let mut demo = Demo {
-        source: file.to_owned(),
-        t_s: Vec::new(),
-        position_m: Vec::new(),
-        orientation: Vec::new(),
-        force_n: Vec::new(),
-        torque_nm: Vec::new(),
+    let layout = Layout {
+        file,
+        delimiter,
+        columns: &col_idx,
+        fields: names.len(),
     };
-    let mut rows = Vec::new();
-    let mut values = [0.0f64; 14];
-    let mut normalised = Normalised::default();
-    while let Some((row, fields)) = next_row()? {
-        if fields.len() != names.len() {
-            return Err(DemoError::Ragged {
-                file: file.to_owned(),
-                row,
-                expected: names.len(),
-                found: fields.len(),
-            });
-        }
-        for ((value, &idx), column) in values.iter_mut().zip(&col_idx).zip(COLUMNS) {
-            let text = fields.get(idx).unwrap_or_default().trim();
-            let parsed = number(text, delimiter).ok_or_else(|| DemoError::NotANumber {
-                file: file.to_owned(),
-                row,
-                column: column.to_owned(),
-                text: text.to_owned(),
-            })?;
-            if !parsed.is_finite() {
-                return Err(DemoError::NonFinite {
-                    file: file.to_owned(),
-                    row,
-                    column: column.to_owned(),
-                    text: text.to_owned(),
-                });
-            }
-            *value = parsed;
-        }
-        let [t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz] = values;
-        if let Some(&previous_s) = demo.t_s.last() {
-            if t <= previous_s {
-                return Err(DemoError::TimeNotIncreasing {
-                    file: file.to_owned(),
-                    row,
-                    t_s: t,
-                    previous_s,
-                });
-            }
-        }
-        let raw = Quaternion::new(qw, qx, qy, qz);
-        let norm = raw.norm();
-        if norm < 1e-9 {
-            return Err(DemoError::ZeroQuaternion {
-                file: file.to_owned(),
-                row,
-            });
-        }
-        normalised.note(norm, row);
-        demo.t_s.push(t);
-        demo.position_m.push(Vector3::new(px, py, pz));
-        demo.orientation.push(UnitQuaternion::from_quaternion(raw));
-        demo.force_n.push(Vector3::new(fx, fy, fz));
-        demo.torque_nm.push(Vector3::new(mx, my, mz));
-        rows.push(row);
+    // The body in pieces that start at line starts, read side by side; a quote may hold a
+    // newline, so a file with quotes is read in one piece.
+    let body = &text[body_start..];
+    let first_line = 1 + newlines(&text.as_bytes()[..body_start]);
+    let pieces = pieces_of(body, pieces);
+    let read: Vec<Piece> = if pieces.len() == 1 {
+        vec![read_piece(reader(body), body, first_line, &layout)]
+    } else {
+        std::thread::scope(|scope| {
+            let mut line = first_line;
+            let handles: Vec<_> = pieces
+                .iter()
+                .map(|&piece| {
+                    let from = line;
+                    line += newlines(piece.as_bytes());
+                    let layout = &layout;
+                    scope.spawn(move || read_piece(reader(piece), piece, from, layout))
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|handle| handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+                .collect()
+        })
+    };
+    let total = read.iter().map(|piece| piece.rows.lines.len()).sum();
+    let mut rows = Rows::with_capacity(file, total);
+    for piece in read {
+        rows.append(piece)?;
     }
+    let Rows {
+        mut demo,
+        lines,
+        normalised,
+    } = rows;
     if demo.is_empty() {
         return Err(DemoError::HeaderOnly { file: file.to_owned() });
     }
@@ -390,7 +591,7 @@ pub fn parse_csv_as(file: &str, text: &str, options: &ReadOptions, dialect: &Dia
             required,
         });
     }
-    let warnings = orientation_warnings(file, &mut demo.orientation, &normalised, |k| rows[k]);
+    let warnings = orientation_warnings(file, &mut demo.orientation, &normalised, |k| lines[k]);
     Ok(Loaded { demo, warnings, wrench })
 }
 
@@ -619,5 +820,98 @@ mod tests {
         let err = parse(&text).expect_err("unknown frame");
         assert!(matches!(err, DemoError::BadDeclaration { row: 2, .. }), "{err}");
         assert!(err.to_string().contains("`base` or `sensor`"), "{err}");
+    }
+
+    /// A body of `n` rows with comment and blank lines among them and some quaternions off
+    /// unit norm, for reading in pieces.
+    fn varied_body(n: usize) -> String {
+        let mut text = format!("# a note\n{HEADER}\n");
+        for k in 0..n {
+            if k % 97 == 13 {
+                text.push_str("# pause\n\n   \n");
+            }
+            let w = if k % 53 == 7 { 1.01 } else { 1.0 };
+            text.push_str(&format!(
+                "{:.3}, {:.4},0.2,0.3,{w},0,0,0,0,0,{:.2},0,0,0\n",
+                k as f64 * 1e-3,
+                0.1 + k as f64 * 1e-4,
+                -((k % 11) as f64)
+            ));
+        }
+        text
+    }
+
+    fn parse_pieces(text: &str, pieces: usize) -> Result<Loaded, DemoError> {
+        parse_in_pieces("demo.csv", text, &ReadOptions::default(), &Dialect::default(), pieces)
+    }
+
+    #[test]
+    fn a_body_read_in_pieces_reads_as_it_does_whole() {
+        let text = varied_body(1000);
+        let whole = parse_pieces(&text, 1).expect("valid");
+        assert_eq!(whole.demo.len(), 1000);
+        for pieces in 2..=4 {
+            assert_eq!(pieces_of(&text, pieces).len(), pieces);
+            let read = parse_pieces(&text, pieces).expect("valid");
+            assert_eq!(read.demo.t_s, whole.demo.t_s, "{pieces} pieces");
+            assert_eq!(read.demo.position_m, whole.demo.position_m);
+            assert_eq!(read.demo.orientation, whole.demo.orientation);
+            assert_eq!(read.demo.force_n, whole.demo.force_n);
+            assert_eq!(read.warnings, whole.warnings, "renormalised count and first row");
+        }
+        assert!(
+            matches!(
+                whole.warnings.first(),
+                Some(DemoWarning::Renormalised {
+                    count: 19,
+                    first_row: 10,
+                    ..
+                })
+            ),
+            "{:?}",
+            whole.warnings
+        );
+    }
+
+    #[test]
+    fn an_error_in_a_later_piece_names_its_line_in_the_file() {
+        let good = varied_body(1000);
+        let line = good.lines().count() - 10;
+        let mut lines: Vec<String> = good.lines().map(str::to_owned).collect();
+        lines[line - 1] = lines[line - 1].replacen("0.2", "nan", 1);
+        let text = lines.join("\n") + "\n";
+        for pieces in 1..=4 {
+            let err = parse_pieces(&text, pieces).expect_err("NaN");
+            assert!(
+                matches!(&err, DemoError::NonFinite { row, .. } if *row == line),
+                "{pieces} pieces: {err}"
+            );
+        }
+        // A time that goes back right where a piece starts is still caught, at its line.
+        let cut = pieces_of(&good, 2)[0];
+        let line = cut.lines().count() + 1;
+        let mut lines: Vec<String> = good.lines().map(str::to_owned).collect();
+        let (t, rest) = lines[line - 1].split_once(',').expect("a row");
+        assert!(t.parse::<f64>().is_ok(), "line {line} is a row: {}", lines[line - 1]);
+        lines[line - 1] = format!("0.0,{rest}");
+        let text = lines.join("\n") + "\n";
+        for pieces in 1..=2 {
+            let err = parse_pieces(&text, pieces).expect_err("time goes back");
+            assert!(
+                matches!(&err, DemoError::TimeNotIncreasing { row, .. } if *row == line),
+                "{pieces} pieces: {err}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_body_with_quotes_is_read_whole() {
+        let text = format!(
+            "{HEADER}\n\"0.0\",0.1,0.2,0.3,1,0,0,0,0,0,0,0,0,0\n{}\n{}\n",
+            row(0.01),
+            row(0.02)
+        );
+        assert_eq!(pieces_of(&text, 4).len(), 1);
+        assert_eq!(parse_pieces(&text, 4).expect("valid").demo.len(), 3);
     }
 }

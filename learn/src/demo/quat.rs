@@ -40,6 +40,15 @@ impl Normalised {
             self.max_deviation = self.max_deviation.max(deviation);
         }
     }
+
+    /// Adds what a reader noted of the rows after those of `self`.
+    pub fn merge(&mut self, later: &Normalised) {
+        if self.count == 0 {
+            self.first_row = later.first_row;
+        }
+        self.count += later.count;
+        self.max_deviation = self.max_deviation.max(later.max_deviation);
+    }
 }
 
 /// Makes `orientation` (read from `file`) sign-continuous (each quaternion negated into its

@@ -117,14 +117,30 @@ pub fn learn_skill(
         learner.frames.push((frame.clone(), segment_start_s));
         frames.insert(decl.name.clone(), frame);
     }
-    let mut motions = BTreeMap::new();
-    for decl in &plan.motions {
-        motions.insert(decl.name.clone(), learner.motion(decl)?);
-    }
-    let mut forces = BTreeMap::new();
-    for decl in &plan.forces {
-        forces.insert(decl.name.clone(), learner.force(decl)?);
-    }
+    // The motions and the forces need only the segments and frames: the forces are learned
+    // beside the motions, by a fork whose quality and warnings come back after the motions'.
+    let (motions, forces) = std::thread::scope(|scope| {
+        let mut fork = learner.fork();
+        let forces = scope.spawn(move || {
+            let forces: Result<BTreeMap<_, _>, LearnError> = plan
+                .forces
+                .iter()
+                .map(|decl| Ok((decl.name.clone(), fork.force(decl)?)))
+                .collect();
+            forces.map(|forces| (forces, fork))
+        });
+        let motions: Result<BTreeMap<_, _>, LearnError> = plan
+            .motions
+            .iter()
+            .map(|decl| Ok((decl.name.clone(), learner.motion(decl)?)))
+            .collect();
+        let forces = forces.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (motions, forces)
+    });
+    // A motion's error comes first, as when they were learned one after the other.
+    let motions = motions?;
+    let (forces, fork) = forces?;
+    learner.absorb(fork);
     let mut thresholds = BTreeMap::new();
     for decl in &plan.thresholds {
         thresholds.insert(decl.name.clone(), learner.threshold(decl)?);
@@ -220,6 +236,36 @@ struct Learner<'a> {
     friction_mu: f64,
     /// Warnings raised while learning.
     warnings: Vec<String>,
+}
+
+impl<'a> Learner<'a> {
+    /// A learner for work beside this one: the same demonstration, segments and frames, with a
+    /// quality and warnings of its own that [`Learner::absorb`] brings back. A fork learns
+    /// motions and forces, whose figures are the only quality it keeps.
+    fn fork(&self) -> Learner<'a> {
+        Learner {
+            demo: self.demo,
+            segments: self.segments,
+            phases: self.phases,
+            frames: self.frames.clone(),
+            quality: Quality::default(),
+            smoothing: self.smoothing,
+            friction_mu: self.friction_mu,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Takes in what `fork` learned after what this learner has.
+    fn absorb(&mut self, mut fork: Learner<'_>) {
+        self.quality.motions.append(&mut fork.quality.motions);
+        self.quality.forces_rms_n.append(&mut fork.quality.forces_rms_n);
+        debug_assert_eq!(
+            fork.quality,
+            Quality::default(),
+            "a fork's quality is its motions' and forces' figures"
+        );
+        self.warnings.append(&mut fork.warnings);
+    }
 }
 
 impl Learner<'_> {

@@ -34,7 +34,17 @@ pub(super) fn choose(
     asked: Option<usize>,
     segment: impl Fn(&Demo) -> Result<Vec<Segment>, LearnError>,
 ) -> Result<Chosen, LearnError> {
-    let found = contact_phases(&demo);
+    // Without a phase asked for, the whole demonstration is cut anyway: finding its contact
+    // phases runs beside the cut (the largest parts of learning, both only read the demo).
+    let (found, whole) = match asked {
+        Some(_) => (contact_phases(&demo), None),
+        None => std::thread::scope(|scope| {
+            let phases = scope.spawn(|| contact_phases(&demo));
+            let whole = segment(&demo);
+            let found = phases.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            (found, Some(whole))
+        }),
+    };
     let expected = expected_phases(plan);
     let mut report = PhaseReport {
         phases_s: found
@@ -75,7 +85,7 @@ pub(super) fn choose(
             warning: None,
         });
     }
-    let whole = segment(&demo);
+    let whole = whole.unwrap_or_else(|| segment(&demo));
     let mixed = match &whole {
         Ok(segments) => mixing_segment(segments, &found.phases),
         Err(_) => None,

@@ -20,6 +20,7 @@ pub mod render;
 pub mod robot_cmd;
 pub mod ros;
 pub mod run_cmd;
+pub mod run_log;
 pub mod scene_view;
 
 pub use cli::{run, Cli};

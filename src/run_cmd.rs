@@ -14,6 +14,7 @@ use crate::link::scene_with_robot;
 use crate::load::{error_chain, learn_from_files, learn_from_source, load_skill_with, read_learned, Failure};
 use crate::out::Verbosity;
 use crate::plot::{self, Plot, Subject, Trial};
+use crate::run_log::{self, LiveLog};
 use skill_runtime::demo::Dialect;
 
 /// Arguments of `skillc run`.
@@ -109,6 +110,16 @@ fn on_plant_or_here<T>(
     {
         let _ = (scene, endpoint, remote);
         Err(crate::link::without_zenoh())
+    }
+}
+
+/// The writer of a run's `-o` log while the run goes on; `None` without `-o`, and in
+/// `--realtime` against a plant, where a second busy thread on the run's side could make its
+/// commands late (that log is written after the run).
+fn live_log(args: &RunArgs, scene: &skill_runtime::sim::Scene) -> Result<Option<LiveLog>, Failure> {
+    match &args.output {
+        Some(path) if !args.link.realtime => LiveLog::start(path, scene).map(Some),
+        _ => Ok(None),
     }
 }
 
@@ -211,6 +222,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
     };
     let scene = scene_with_robot(&args.scene, &args.sets, args.robot.as_deref())?;
     refuse_noted_output(args)?;
+    let live = live_log(args, &scene)?;
     let options = ExecOptions {
         overrides: skill_ir::Overrides {
             force_scale: args.force_scale,
@@ -219,6 +231,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         },
         limits: args.limits.clone(),
         prepose: !args.no_prepose,
+        tap: live.as_ref().map(LiveLog::tap),
         ..ExecOptions::default()
     };
     let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
@@ -233,8 +246,12 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         |robot, plant| run_on_plant(&scene, robot, plant, mode, &options),
         || simulate(&scene, mode, &options),
     )?;
+    drop(options);
     if let Some(path) = &args.output {
-        write_log(path, &[(None, &log)], &scene, || log.to_csv())?;
+        match live {
+            Some(live) => live.finish(path)?,
+            None => run_log::write_after(path, &[(None, &log)], &scene)?,
+        }
     }
     let mut text = summary(&skill.name, args.replay, &report, &log);
     if let Some(line) = link_line {
@@ -247,58 +264,6 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         plot_run(dir, demo, &bound, args.replay, &log, &mut text)?;
     }
     Ok((report, text))
-}
-
-/// Writes a run's log to `path` (atomically): MCAP when the path ends in `.mcap`, with the scene
-/// robot's joint names, else the CSV `csv` makes.
-fn write_log(
-    path: &Path,
-    logs: &[(Option<&str>, &RunLog)],
-    scene: &skill_runtime::sim::Scene,
-    csv: impl FnOnce() -> String,
-) -> Result<(), Failure> {
-    let bytes = if crate::ros::is_mcap(path) {
-        mcap_log(path, logs, scene)?
-    } else {
-        csv().into_bytes()
-    };
-    atomic::write(path, &bytes).map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", path.display())))
-}
-
-#[cfg(feature = "mcap")]
-fn mcap_log(
-    path: &Path,
-    logs: &[(Option<&str>, &RunLog)],
-    scene: &skill_runtime::sim::Scene,
-) -> Result<Vec<u8>, Failure> {
-    // The names, the transforms and the description are for viewers: without the robot the
-    // joints are called joint_1... and the bag has no /tf.
-    let urdf = std::fs::read_to_string(scene.urdf_path()).ok();
-    let robot = urdf
-        .as_deref()
-        .and_then(|text| skill_runtime::robot::Robot::from_urdf_str(text, scene.spec().robot.tool.as_deref()).ok());
-    let names: Vec<String> = robot
-        .as_ref()
-        .map(|robot| robot.joints().iter().map(|joint| joint.name.clone()).collect())
-        .unwrap_or_default();
-    let description = match (&robot, &urdf) {
-        (Some(robot), Some(urdf)) => Some(crate::ros::RobotDescription { robot, urdf }),
-        _ => None,
-    };
-    crate::ros::write_run_log(logs, &names, description.as_ref(), &scene.spec().objects)
-        .map_err(|err| Failure::Usage(format!("cannot write `{}`: {}", path.display(), error_chain(&err))))
-}
-
-#[cfg(not(feature = "mcap"))]
-fn mcap_log(
-    path: &Path,
-    _logs: &[(Option<&str>, &RunLog)],
-    _scene: &skill_runtime::sim::Scene,
-) -> Result<Vec<u8>, Failure> {
-    Err(Failure::Usage(format!(
-        "cannot write `{}`: this skillc was built without the `mcap` feature",
-        path.display()
-    )))
 }
 
 /// Draws the eval's plots for one run.
@@ -513,9 +478,11 @@ fn run_task(
         .collect::<Result<_, _>>()?;
     let steps = bind_all(&task.steps, &prepared)?;
     let fallbacks = bind_all(&task.fallbacks, &prepared_fallbacks)?;
+    let live = live_log(args, &scene)?;
     let options = ExecOptions {
         limits: args.limits.clone(),
         prepose: !args.no_prepose,
+        tap: live.as_ref().map(LiveLog::tap),
         ..ExecOptions::default()
     };
     let (run, link_line) = on_plant_or_here(
@@ -530,7 +497,10 @@ fn run_task(
             .iter()
             .map(|step| (Some(step.step.as_str()), &step.log))
             .collect();
-        write_log(path, &logs, &scene, || run.to_csv())?;
+        match live {
+            Some(live) => live.finish(path)?,
+            None => run_log::write_after(path, &logs, &scene)?,
+        }
     }
     let mut text = String::new();
     // The header counts the task's own steps (run.steps also holds a fallback that ran).

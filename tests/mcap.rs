@@ -657,3 +657,109 @@ fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
     );
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+/// A tick of a 7-joint arm at `t_s` in state `state`, its numbers varying with `t_s`.
+fn tick_at(t_s: f64, state: u32) -> skill_runtime::exec::Tick {
+    let q: Vec<f64> = (0..7).map(|j| 0.1 * j as f64 + t_s).collect();
+    skill_runtime::exec::Tick {
+        t_s,
+        state,
+        desired: [0.5 + t_s, 0.1, 0.2, 0.0, 1.0, 0.0, 0.0],
+        measured: [0.5 + 0.9 * t_s, 0.1, 0.2, 0.0, 1.0, 0.0, 0.0],
+        wrench_base: [0.0, 0.0, -10.0 * t_s, 0.0, 0.0, 0.0],
+        wrench_cf: [0.0; 6],
+        desired_cf: [0.0, 0.0, 5.0, 0.0, 0.0, 0.0],
+        frame: [0.0, 1.0, 0.0, 0.0],
+        selection: 0b11_1011,
+        torques: skill_runtime::exec::JointValues::from_slices(&[&q]),
+        joint_state: skill_runtime::exec::JointValues::from_slices(&[&q, &[0.01; 7]]),
+    }
+}
+
+#[test]
+fn a_run_log_written_in_batches_is_the_log_written_whole() {
+    // Two logs, the second's clock starting again (a task's next step), states changing
+    // between and inside the batches a tap sends.
+    let mut first = skill_runtime::exec::RunLog::default();
+    let mut second = skill_runtime::exec::RunLog::default();
+    for (log, ticks) in [(&mut first, 95), (&mut second, 41)] {
+        let [a, b] = [log.state_index("approach"), log.state_index("press")];
+        for k in 0..ticks {
+            let state = if k % 30 < 13 { a } else { b };
+            log.ticks.push(tick_at(k as f64 * 1e-3, state));
+        }
+    }
+    let scene = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
+    let objects = &scene.spec().objects;
+    let names: Vec<String> = (1..=7).map(|j| format!("j{j}")).collect();
+    let logs = [(None, &first), (Some("press"), &second)];
+    let whole = skillc::ros::write_run_log(&logs, &names, None, objects).expect("written whole");
+    for batch in [1, 7, 30, 1000] {
+        let mut writer = skillc::ros::RunLogWriter::new(&names, None, objects);
+        for (step, log) in &logs {
+            writer.start_log(step.map(str::to_owned));
+            for ticks in log.ticks.chunks(batch) {
+                writer.push(&log.states, ticks).expect("a batch");
+            }
+        }
+        let batched = writer.finish().expect("written in batches");
+        assert!(batched == whole, "batches of {batch}: the bytes differ");
+    }
+    let topics = {
+        let dir = temp_dir("batches");
+        let path = dir.join("log.mcap");
+        std::fs::write(&path, &whole).expect("written");
+        messages(&path)
+    };
+    assert_eq!(topics[RunLogTopics::JOINT_STATES].3.len(), 95 + 41);
+    let states: Vec<String> = topics[RunLogTopics::STATE]
+        .3
+        .iter()
+        .map(|data| decode_string(data).expect("a string"))
+        .collect();
+    assert_eq!(states[..2], ["approach", "press"]);
+    assert_eq!(states.last().map(String::as_str), Some("press/approach"));
+}
+
+#[test]
+fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
+    let (_, skill) = load_skill(&root().join("stdlib-skills/touch.skill"), None).expect("touch");
+    let learned = learn_from_files(
+        &skill,
+        &root().join("examples/demos/touch.csv"),
+        &LearnOptions::default(),
+    )
+    .expect("learns");
+    let scene = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &[]).expect("scene");
+    let bound = skill_runtime::exec::bind(&skill, &learned).expect("binds");
+    let dir = temp_dir("live");
+    for ext in ["csv", "mcap"] {
+        let live_path = dir.join(format!("live.{ext}"));
+        let live = skillc::run_log::LiveLog::start(&live_path, &scene).expect("writer starts");
+        let options = skill_runtime::exec::ExecOptions {
+            tap: Some(live.tap()),
+            ..Default::default()
+        };
+        let (report, log) =
+            skill_runtime::exec::simulate(&scene, skill_runtime::exec::Mode::Skill(&bound), &options).expect("runs");
+        drop(options);
+        assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+        assert!(
+            log.ticks.len() > 3000,
+            "a run of several batches: {} ticks",
+            log.ticks.len()
+        );
+        live.finish(&live_path).expect("written live");
+        let after_path = dir.join(format!("after.{ext}"));
+        skillc::run_log::write_after(&after_path, &[(None, &log)], &scene).expect("written after");
+        let (live, after) = (
+            std::fs::read(&live_path).expect("live"),
+            std::fs::read(&after_path).expect("after"),
+        );
+        assert!(
+            live == after,
+            "{ext}: the live log differs from the log written after the run"
+        );
+        assert!(live.len() > 100_000, "{ext}: {} bytes", live.len());
+    }
+}

@@ -21,8 +21,8 @@ mod write;
 pub use read::{read_demo, BagDemo, MAX_RECORD_BYTES, MAX_SAMPLES, MAX_TRANSFORMS};
 #[cfg(feature = "mcap")]
 pub use write::{
-    write_demo, write_run_log, RobotDescription, RunLogTopics, DEMO_POSE_TOPIC, DEMO_WRENCH_TOPIC, FORCE_ARROW_MIN_N,
-    FORCE_ARROW_M_PER_N, TF_PERIOD_TICKS,
+    write_demo, write_run_log, RobotDescription, RunLogTopics, RunLogWriter, DEMO_POSE_TOPIC, DEMO_WRENCH_TOPIC,
+    FORCE_ARROW_MIN_N, FORCE_ARROW_M_PER_N, TF_PERIOD_TICKS,
 };
 
 /// Which topics of a bag to read a demonstration from; `None` finds them by type.

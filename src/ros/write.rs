@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::io::Cursor;
 
 use skill_runtime::demo::{Demo, WrenchFrame};
-use skill_runtime::exec::RunLog;
+use skill_runtime::exec::{RunLog, Tick};
 
 use skill_runtime::sim::{ObjectShape, ObjectSpec};
 
@@ -319,60 +319,115 @@ pub fn write_run_log(
     description: Option<&RobotDescription<'_>>,
     objects: &BTreeMap<String, ObjectSpec>,
 ) -> Result<Vec<u8>, BagError> {
-    let robot_topics = if description.is_some() { 0 } else { 3 };
-    let topics = &RunLogTopics::ALL[robot_topics..];
-    let mut bag = Bag::new(topics)?;
-    let first_t = logs
-        .iter()
-        .find_map(|(_, log)| log.ticks.first())
-        .map_or(Time::from_seconds(0.0), |tick| Time::from_seconds(tick.t_s));
-    let mut kinematics = None;
-    if let Some(description) = description {
-        let robot = description.robot;
-        bag.put(
-            RunLogTopics::ROBOT_DESCRIPTION,
-            first_t,
-            &encode_string(description.urdf),
-        )?;
-        let mut data = robot.data();
-        robot.forward_kinematics(&mut data, &vec![0.0; robot.dof()]);
-        // Links no joint moves go on /tf_static once, the others on /tf.
-        let (fixed, moving): (Vec<usize>, Vec<usize>) =
-            (0..robot.links().len()).partition(|&link| robot.links()[link].body.is_none());
-        let fixed: Vec<_> = fixed
-            .into_iter()
-            .map(|link| link_transform(first_t, &robot.links()[link].name, &robot.link_in_base(&data, link)))
-            .collect();
-        bag.put(RunLogTopics::TF_STATIC, first_t, &super::msgs::encode_tf(&fixed))?;
-        kinematics = Some((robot, data, moving));
-    }
-    bag.put(
-        RunLogTopics::SCENE,
-        first_t,
-        &encode_markers(&scene_markers(first_t, objects)),
-    )?;
-    let mut tick_index = 0usize;
-    let mut offset_s = 0.0;
-    let mut last_s = f64::NEG_INFINITY;
-    let mut last_state: Option<String> = None;
-    let mut names: Vec<String> = joint_names.to_vec();
+    let mut writer = RunLogWriter::new(joint_names, description, objects);
     for (step, log) in logs {
-        if let Some(first) = log.ticks.first() {
-            if first.t_s + offset_s <= last_s {
-                offset_s = last_s + 1e-3 - first.t_s;
-            }
+        writer.start_log(step.map(str::to_owned));
+        writer.push(&log.states, &log.ticks)?;
+    }
+    writer.finish()
+}
+
+/// A run log written as MCAP as its ticks arrive (through a tap, while the run goes on): the
+/// bytes [`write_run_log`] makes of the whole logs. The bag starts at the first tick, whose
+/// time the latched topics carry.
+pub struct RunLogWriter {
+    /// The robot and its URDF, for `/robot_description` and `/tf`.
+    robot: Option<(skill_runtime::robot::Robot, String)>,
+    objects: BTreeMap<String, ObjectSpec>,
+    /// The joint names, `joint_N` added for joints past the robot's.
+    names: Vec<String>,
+    /// The bag and, with a robot, its model's data and the links joints move; from the first tick.
+    bag: Option<(Bag, Option<Kinematics>)>,
+    /// The task step of the log being written, and whether its first tick is still to come.
+    step: Option<String>,
+    log_started: bool,
+    tick_index: usize,
+    offset_s: f64,
+    last_s: f64,
+    last_state: Option<String>,
+}
+
+/// The robot model's data and the links its joints move, for `/tf`.
+type Kinematics = (skill_runtime::robot::RobotData, Vec<usize>);
+
+impl RunLogWriter {
+    /// A writer of logs of an arm with `joint_names` (see [`write_run_log`]).
+    pub fn new(
+        joint_names: &[String],
+        description: Option<&RobotDescription<'_>>,
+        objects: &BTreeMap<String, ObjectSpec>,
+    ) -> Self {
+        RunLogWriter {
+            robot: description.map(|d| (d.robot.clone(), d.urdf.to_owned())),
+            objects: objects.clone(),
+            names: joint_names.to_vec(),
+            bag: None,
+            step: None,
+            log_started: false,
+            tick_index: 0,
+            offset_s: 0.0,
+            last_s: f64::NEG_INFINITY,
+            last_state: None,
         }
-        for tick in &log.ticks {
-            let t_s = tick.t_s + offset_s;
-            last_s = t_s;
+    }
+
+    /// The next ticks are the next log's, of task step `step`.
+    pub fn start_log(&mut self, step: Option<String>) {
+        self.step = step;
+        self.log_started = true;
+    }
+
+    /// The bag with its latched topics, begun at `first_t`.
+    fn begin(&self, first_t: Time) -> Result<(Bag, Option<Kinematics>), BagError> {
+        let robot_topics = if self.robot.is_some() { 0 } else { 3 };
+        let topics = &RunLogTopics::ALL[robot_topics..];
+        let mut bag = Bag::new(topics)?;
+        let mut kinematics = None;
+        if let Some((robot, urdf)) = &self.robot {
+            bag.put(RunLogTopics::ROBOT_DESCRIPTION, first_t, &encode_string(urdf))?;
+            let mut data = robot.data();
+            robot.forward_kinematics(&mut data, &vec![0.0; robot.dof()]);
+            // Links no joint moves go on /tf_static once, the others on /tf.
+            let (fixed, moving): (Vec<usize>, Vec<usize>) =
+                (0..robot.links().len()).partition(|&link| robot.links()[link].body.is_none());
+            let fixed: Vec<_> = fixed
+                .into_iter()
+                .map(|link| link_transform(first_t, &robot.links()[link].name, &robot.link_in_base(&data, link)))
+                .collect();
+            bag.put(RunLogTopics::TF_STATIC, first_t, &super::msgs::encode_tf(&fixed))?;
+            kinematics = Some((data, moving));
+        }
+        bag.put(
+            RunLogTopics::SCENE,
+            first_t,
+            &encode_markers(&scene_markers(first_t, &self.objects)),
+        )?;
+        Ok((bag, kinematics))
+    }
+
+    /// Writes `ticks`, the next ticks of the current log, whose state names are `states`.
+    pub fn push(&mut self, states: &[String], ticks: &[Tick]) -> Result<(), BagError> {
+        let Some(first) = ticks.first() else { return Ok(()) };
+        if self.bag.is_none() {
+            self.bag = Some(self.begin(Time::from_seconds(first.t_s))?);
+        }
+        if std::mem::take(&mut self.log_started) && first.t_s + self.offset_s <= self.last_s {
+            self.offset_s = self.last_s + 1e-3 - first.t_s;
+        }
+        let Some((bag, kinematics)) = self.bag.as_mut() else {
+            return Ok(());
+        };
+        for tick in ticks {
+            let t_s = tick.t_s + self.offset_s;
+            self.last_s = t_s;
             let t = Time::from_seconds(t_s);
             let dof = tick.joint_state.len() / 2;
-            while names.len() < dof {
-                names.push(format!("joint_{}", names.len() + 1));
+            while self.names.len() < dof {
+                self.names.push(format!("joint_{}", self.names.len() + 1));
             }
             let joints = JointState {
                 header: header(t, ""),
-                name: names[..dof].to_vec(),
+                name: self.names[..dof].to_vec(),
                 position: tick.joint_state[..dof].to_vec(),
                 velocity: tick.joint_state[dof..2 * dof].to_vec(),
                 effort: tick.torques.to_vec(),
@@ -387,7 +442,7 @@ pub fn write_run_log(
                 torque: [-w[3], -w[4], -w[5]],
             };
             bag.put(RunLogTopics::WRENCH, t, &wrench.encode())?;
-            let on_view_tick = tick_index.is_multiple_of(TF_PERIOD_TICKS);
+            let on_view_tick = self.tick_index.is_multiple_of(TF_PERIOD_TICKS);
             if on_view_tick {
                 let desired = tick.desired_force_base();
                 let arrows = force_arrows(
@@ -398,7 +453,7 @@ pub fn write_run_log(
                 );
                 bag.put(RunLogTopics::CONTACT_FORCE, t, &encode_markers(&arrows))?;
             }
-            if let Some((robot, data, moving_links)) = kinematics.as_mut() {
+            if let (Some((robot, _)), Some((data, moving_links))) = (&self.robot, kinematics.as_mut()) {
                 if on_view_tick && dof == robot.dof() {
                     robot.forward_kinematics(data, &tick.joint_state[..dof]);
                     let moving: Vec<_> = moving_links
@@ -408,17 +463,26 @@ pub fn write_run_log(
                     bag.put(RunLogTopics::TF, t, &super::msgs::encode_tf(&moving))?;
                 }
             }
-            tick_index += 1;
-            let state = log.states.get(tick.state as usize).map_or("?", String::as_str);
-            let state = match step {
+            self.tick_index += 1;
+            let state = states.get(tick.state as usize).map_or("?", String::as_str);
+            let state = match &self.step {
                 Some(step) => format!("{step}/{state}"),
                 None => state.to_owned(),
             };
-            if last_state.as_deref() != Some(state.as_str()) {
+            if self.last_state.as_deref() != Some(state.as_str()) {
                 bag.put(RunLogTopics::STATE, t, &encode_string(&state))?;
-                last_state = Some(state);
+                self.last_state = Some(state);
             }
         }
+        Ok(())
     }
-    bag.finish()
+
+    /// The whole file.
+    pub fn finish(mut self) -> Result<Vec<u8>, BagError> {
+        let (bag, _) = match self.bag.take() {
+            Some(begun) => begun,
+            None => self.begin(Time::from_seconds(0.0))?,
+        };
+        bag.finish()
+    }
 }

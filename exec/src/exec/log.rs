@@ -121,15 +121,152 @@ impl<const N: usize> std::fmt::Debug for JointValues<N> {
 }
 
 /// Every tick of a run, with the names of the states ticks refer to.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default)]
 pub struct RunLog {
     /// State names (`prepose`, `replay:<motion>` and the skill's states).
     pub states: Vec<String>,
     /// The ticks in time order.
     pub ticks: Vec<Tick>,
+    /// Where the ticks are also sent as they are logged.
+    tap: Option<Tapped>,
+}
+
+/// A log's place on a tap: the tap, the log's number on it and how many ticks have been sent.
+#[derive(Debug, Clone)]
+struct Tapped {
+    tap: LogTap,
+    log: usize,
+    sent: usize,
+}
+
+/// Two logs are equal when their states and ticks are: a tap is where they went, not what
+/// they hold.
+impl PartialEq for RunLog {
+    fn eq(&self, other: &Self) -> bool {
+        self.states == other.states && self.ticks == other.ticks
+    }
+}
+
+/// Ticks are sent on in batches of this many (about 0.4 MB at 1 ms a tick, a second apart).
+const TAP_BATCH_TICKS: usize = 1024;
+
+/// A channel to a log writer on another thread: the runs of [`crate::exec::ExecOptions::tap`]
+/// send their ticks on as they log them, in batches, so that a file is written while the arm
+/// moves rather than after (`skillc run -o`). Each log started on the tap gets a number, in
+/// the order the logs were started.
+#[derive(Clone)]
+pub struct LogTap {
+    sender: std::sync::mpsc::Sender<TapEvent>,
+    /// The number the next log started gets.
+    next_log: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+}
+
+impl std::fmt::Debug for LogTap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("LogTap")
+    }
+}
+
+/// Options that tap the same channel are the same options.
+impl PartialEq for LogTap {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.next_log, &other.next_log)
+    }
+}
+
+/// What a [`LogTap`] carries, in the order it happened.
+#[derive(Debug)]
+pub enum TapEvent {
+    /// A log started: its number, and the task step it is of, if any.
+    Log {
+        /// The log's number (0 for the first started on the tap, then 1, ...).
+        log: usize,
+        /// The task step.
+        step: Option<String>,
+    },
+    /// Ticks of a log started before.
+    Ticks {
+        /// The log's number.
+        log: usize,
+        /// The log's state names as they stand (a later batch may have more).
+        states: Vec<String>,
+        /// The ticks logged since the log's previous batch.
+        ticks: Vec<Tick>,
+    },
+    /// Nothing more comes: sent by whoever made the tap once its runs are over.
+    End,
+}
+
+impl LogTap {
+    /// A tap and the receiving end of its channel.
+    pub fn channel() -> (LogTap, std::sync::mpsc::Receiver<TapEvent>) {
+        let (sender, receiver) = std::sync::mpsc::channel();
+        let tap = LogTap {
+            sender,
+            next_log: std::sync::Arc::default(),
+        };
+        (tap, receiver)
+    }
+
+    /// Tells the writer that nothing more comes.
+    pub fn end(&self) {
+        let _ = self.sender.send(TapEvent::End);
+    }
 }
 
 impl RunLog {
+    /// An empty log whose ticks `tap` (if any) also receives, as a log of task step `step`.
+    pub fn tapped(tap: Option<&LogTap>, step: Option<&str>) -> RunLog {
+        let tap = tap.map(|tap| {
+            let log = tap.next_log.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let _ = tap.sender.send(TapEvent::Log {
+                log,
+                step: step.map(str::to_owned),
+            });
+            Tapped {
+                tap: tap.clone(),
+                log,
+                sent: 0,
+            }
+        });
+        RunLog {
+            tap,
+            ..RunLog::default()
+        }
+    }
+
+    /// Sends the ticks not yet sent when a batch is full (every tick is logged through here).
+    pub(crate) fn offer(&mut self) {
+        if let Some(tapped) = &self.tap {
+            if self.ticks.len() - tapped.sent >= TAP_BATCH_TICKS {
+                self.send_rest();
+            }
+        }
+    }
+
+    /// Sends the ticks not yet sent and lets go of the tap, and gives back memory reserved for ticks never logged: the
+    /// log is complete.
+    pub(crate) fn finish(&mut self) {
+        self.send_rest();
+        self.tap = None;
+        self.ticks.shrink_to_fit();
+    }
+
+    fn send_rest(&mut self) {
+        let Some(tapped) = &mut self.tap else { return };
+        if tapped.sent == self.ticks.len() {
+            return;
+        }
+        let batch = TapEvent::Ticks {
+            log: tapped.log,
+            states: self.states.clone(),
+            ticks: self.ticks[tapped.sent..].to_vec(),
+        };
+        tapped.sent = self.ticks.len();
+        // A writer that has gone away takes nothing more; the log itself keeps every tick.
+        let _ = tapped.tap.sender.send(batch);
+    }
+
     /// Reserves room for `ticks` more ticks, so that recording them does not allocate.
     pub fn reserve(&mut self, ticks: usize) {
         self.ticks.reserve(ticks);
@@ -237,6 +374,76 @@ pub fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
     let dof = first.map_or(0, |t| t.torques.len());
     let rows: usize = logs.iter().map(|(_, log)| log.ticks.len()).sum();
     let mut out: Vec<u8> = Vec::with_capacity(rows * 400);
+    csv_header(&mut out, dof);
+    // The rows are formatted in pieces side by side (a minute's log is 60 000 rows of 60
+    // numbers), each piece a run of one log's ticks, and joined in order.
+    let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    let per_piece = rows.div_ceil(threads.clamp(1, 4)).max(CSV_PIECE_ROWS);
+    let pieces: Vec<(Option<&str>, &RunLog, &[Tick])> = logs
+        .iter()
+        .flat_map(|&(step, log)| log.ticks.chunks(per_piece).map(move |ticks| (step, log, ticks)))
+        .collect();
+    if pieces.len() <= 1 {
+        for &(step, log, ticks) in &pieces {
+            csv_rows(&mut out, step, &log.states, ticks);
+        }
+    } else {
+        let written: Vec<Vec<u8>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = pieces
+                .iter()
+                .map(|&(step, log, ticks)| {
+                    scope.spawn(move || {
+                        let mut out = Vec::with_capacity(ticks.len() * 400);
+                        csv_rows(&mut out, step, &log.states, ticks);
+                        out
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|handle| handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+                .collect()
+        });
+        for piece in written {
+            out.extend_from_slice(&piece);
+        }
+    }
+    String::from_utf8(out).expect("the log is ASCII numbers and the skill's UTF-8 state and step names")
+}
+
+/// Rows a piece of the CSV log holds at least, so that a short log is written on one thread.
+const CSV_PIECE_ROWS: usize = 4096;
+
+/// A CSV log written as its ticks arrive (through a [`LogTap`]): the text [`csv`] makes of
+/// the whole logs.
+#[derive(Debug, Default)]
+pub struct CsvLog {
+    out: Vec<u8>,
+    header: bool,
+}
+
+impl CsvLog {
+    /// Appends the rows of `ticks`, the next ticks of a log with `states` (of task step `step`).
+    pub fn push(&mut self, step: Option<&str>, states: &[String], ticks: &[Tick]) {
+        let Some(first) = ticks.first() else { return };
+        if !self.header {
+            csv_header(&mut self.out, first.torques.len());
+            self.header = true;
+        }
+        csv_rows(&mut self.out, step, states, ticks);
+    }
+
+    /// The whole text.
+    pub fn finish(mut self) -> String {
+        if !self.header {
+            csv_header(&mut self.out, 0);
+        }
+        String::from_utf8(self.out).expect("the log is ASCII numbers and the skill's UTF-8 state and step names")
+    }
+}
+
+/// Appends the CSV log's header line for an arm of `dof` joints.
+fn csv_header(out: &mut Vec<u8>, dof: usize) {
     out.extend_from_slice(b"t,state,xd,yd,zd,qwd,qxd,qyd,qzd,x,y,z,qw,qx,qy,qz,fx,fy,fz,mx,my,mz,");
     out.extend_from_slice(b"cf_fx,cf_fy,cf_fz,cf_mx,cf_my,cf_mz,cf_fx_d,cf_fy_d,cf_fz_d,cf_mx_d,cf_my_d,cf_mz_d,");
     out.extend_from_slice(b"cf_zx,cf_zy,cf_zz,sel_x,sel_y,sel_z,sel_rx,sel_ry,sel_rz");
@@ -246,51 +453,134 @@ pub fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
         }
     }
     out.push(b'\n');
-    for (step, log) in logs {
-        for tick in &log.ticks {
-            let state = &log.states[tick.state as usize];
-            push_fixed(&mut out, tick.t_s, 4);
-            out.push(b',');
-            if let Some(step) = step {
-                out.extend_from_slice(step.as_bytes());
-                out.push(b'/');
-            }
-            out.extend_from_slice(state.as_bytes());
-            let columns = [
-                (&tick.desired[..], 6),
-                (&tick.measured[..], 6),
-                (&tick.wrench_base[..], 4),
-                (&tick.wrench_cf[..], 4),
-                (&tick.desired_cf[..], 4),
-                (&tick.frame_z()[..], 5),
-            ];
-            for (values, precision) in columns {
-                for value in values {
-                    out.push(b',');
-                    push_fixed(&mut out, *value, precision);
-                }
-            }
-            for bit in 0..6 {
-                out.extend_from_slice(if tick.selection & (1 << bit) != 0 { b",P" } else { b",F" });
-            }
-            for value in &tick.torques {
-                out.push(b',');
-                push_fixed(&mut out, *value, 4);
-            }
-            for value in &tick.joint_state {
-                out.push(b',');
-                push_fixed(&mut out, *value, 6);
-            }
-            out.push(b'\n');
+}
+
+/// Appends the CSV rows of `ticks`, ticks of a log with `states` (of task step `step`).
+fn csv_rows(out: &mut Vec<u8>, step: Option<&str>, states: &[String], ticks: &[Tick]) {
+    for tick in ticks {
+        let state = states.get(tick.state as usize).map_or("?", String::as_str);
+        push_fixed(out, tick.t_s, 4);
+        out.push(b',');
+        if let Some(step) = step {
+            out.extend_from_slice(step.as_bytes());
+            out.push(b'/');
         }
+        out.extend_from_slice(state.as_bytes());
+        let columns = [
+            (&tick.desired[..], 6),
+            (&tick.measured[..], 6),
+            (&tick.wrench_base[..], 4),
+            (&tick.wrench_cf[..], 4),
+            (&tick.desired_cf[..], 4),
+            (&tick.frame_z()[..], 5),
+        ];
+        for (values, precision) in columns {
+            for value in values {
+                out.push(b',');
+                push_fixed(out, *value, precision);
+            }
+        }
+        for bit in 0..6 {
+            out.extend_from_slice(if tick.selection & (1 << bit) != 0 { b",P" } else { b",F" });
+        }
+        for value in &tick.torques {
+            out.push(b',');
+            push_fixed(out, *value, 4);
+        }
+        for value in &tick.joint_state {
+            out.push(b',');
+            push_fixed(out, *value, 6);
+        }
+        out.push(b'\n');
     }
-    String::from_utf8(out).expect("the log is ASCII numbers and the skill's UTF-8 state and step names")
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{push_fixed, JointValues, Tick};
+    use super::{csv, push_fixed, CsvLog, JointValues, LogTap, RunLog, TapEvent, Tick, TAP_BATCH_TICKS};
     use nalgebra::{UnitQuaternion, Vector3};
+
+    /// A tick of a 2-joint arm at `t_s` in state `state`, its numbers varying with `t_s`.
+    fn tick_at(t_s: f64, state: u32) -> Tick {
+        Tick {
+            t_s,
+            state,
+            desired: [t_s, 0.1, 0.2, 1.0, 0.0, 0.0, 0.0],
+            measured: [t_s * 0.9, 0.1, 0.2, 1.0, 0.0, 0.0, 0.0],
+            wrench_base: [0.0, 0.0, -t_s, 0.0, 0.0, 0.0],
+            wrench_cf: [0.0; 6],
+            desired_cf: [0.0, 0.0, 5.0, 0.0, 0.0, 0.0],
+            frame: [1.0, 0.0, 0.0, 0.0],
+            selection: 0b11_1011,
+            torques: JointValues::from_slices(&[&[t_s, -t_s]]),
+            joint_state: JointValues::from_slices(&[&[0.5, t_s], &[0.0, 0.1]]),
+        }
+    }
+
+    /// Logs `ticks` ticks into `log` the way the rig does (push, then offer), a second state
+    /// added half way.
+    fn log_ticks(log: &mut RunLog, ticks: usize, t0: f64) {
+        let first = log.state_index("approach");
+        for k in 0..ticks {
+            let state = if k < ticks / 2 { first } else { log.state_index("press") };
+            log.ticks.push(tick_at(t0 + k as f64 * 1e-3, state));
+            log.offer();
+        }
+        log.finish();
+    }
+
+    #[test]
+    fn a_tapped_log_sends_every_tick_once_in_order_with_its_step() {
+        let (tap, events) = LogTap::channel();
+        let mut skill = RunLog::tapped(Some(&tap), None);
+        log_ticks(&mut skill, 2 * TAP_BATCH_TICKS + 17, 0.0);
+        let mut step = RunLog::tapped(Some(&tap), Some("press"));
+        log_ticks(&mut step, 10, 0.0);
+        let untapped = RunLog::tapped(None, Some("ignored"));
+        tap.end();
+        drop(tap);
+        assert!(untapped.tap.is_none() && skill.tap.is_none() && step.tap.is_none());
+
+        let events: Vec<TapEvent> = events.iter().collect();
+        let mut rebuilt = CsvLog::default();
+        let mut current = None;
+        let mut batches = Vec::new();
+        for event in &events {
+            match event {
+                TapEvent::Log { log, step } => {
+                    assert_eq!(*log, batches.len(), "logs are numbered as they start");
+                    batches.push(0);
+                    current = step.clone();
+                }
+                TapEvent::Ticks { log, states, ticks } => {
+                    assert_eq!(*log + 1, batches.len(), "a log's ticks come after it started");
+                    batches[*log] += 1;
+                    rebuilt.push(current.as_deref(), states, ticks);
+                }
+                TapEvent::End => {}
+            }
+        }
+        assert!(matches!(events.last(), Some(TapEvent::End)));
+        assert_eq!(batches, [3, 1], "full batches, then the rest at the end");
+        let whole = csv(&[(None, &skill), (Some("press"), &step)]);
+        assert_eq!(rebuilt.finish(), whole);
+        assert!(whole.contains(",press/approach,") && whole.contains(",press,"));
+        assert_eq!(CsvLog::default().finish(), csv(&[]), "no ticks: the header alone");
+    }
+
+    #[test]
+    fn a_long_log_formatted_in_pieces_reads_as_one_formatted_in_order() {
+        let mut long = RunLog::default();
+        log_ticks(&mut long, 3 * super::CSV_PIECE_ROWS + 5, 0.0);
+        let mut short = RunLog::default();
+        log_ticks(&mut short, 30, 0.0);
+        let mut sequential = CsvLog::default();
+        sequential.push(None, &long.states, &long.ticks);
+        sequential.push(Some("s"), &short.states, &short.ticks);
+        let text = csv(&[(None, &long), (Some("s"), &short)]);
+        assert_eq!(text.lines().count(), 1 + long.ticks.len() + short.ticks.len());
+        assert_eq!(text, sequential.finish());
+    }
 
     /// The frame's z axis and the desired force in base axes equal what nalgebra's rotation of
     /// the stored quaternion gives, for frames turned every way.

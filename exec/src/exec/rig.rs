@@ -130,6 +130,7 @@ impl<'p> Rig<'p> {
                 &self.torques,
                 &self.obs,
             ));
+            log.offer();
         }
         let checked = self
             .supervisor
@@ -187,6 +188,7 @@ impl<'p> Rig<'p> {
                     &self.torques,
                     &self.obs,
                 ));
+                log.offer();
             }
             self.apply_and_step("reflex", dt)?;
         }

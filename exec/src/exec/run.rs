@@ -39,6 +39,9 @@ pub struct ExecOptions {
     /// implies, the skill's `limits { }` and the step's (names as in
     /// [`crate::safety::Limits::set`], SI values).
     pub limits: Vec<(String, f64)>,
+    /// Where the logs of the runs made with these options also send their ticks as they are
+    /// logged (a file writer on another thread); `None` keeps them in the log only.
+    pub tap: Option<super::log::LogTap>,
 }
 
 impl Default for ExecOptions {
@@ -52,6 +55,7 @@ impl Default for ExecOptions {
             replay_stiffness: [2000.0, 2000.0, 2000.0, 150.0, 150.0, 150.0],
             step_limits: Vec::new(),
             limits: Vec::new(),
+            tap: None,
         }
     }
 }
@@ -216,7 +220,7 @@ pub fn run_skill(
     reserve_log(&mut log, options);
     let result = skill_loop(bound, rig, options, log.as_deref_mut(), &mut visits, start_s);
     if let Some(log) = log {
-        log.ticks.shrink_to_fit();
+        log.finish();
     }
     let location_of = |state: &str| {
         bound
@@ -513,7 +517,7 @@ pub fn run_replay(
     reserve_log(&mut log, options);
     let result = replay_loop(learned, rig, options, log.as_deref_mut(), &mut visits, start_s);
     if let Some(log) = log {
-        log.ticks.shrink_to_fit();
+        log.finish();
     }
     finish(result, rig, visits, start_s, |_| None)
 }

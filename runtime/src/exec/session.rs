@@ -94,7 +94,7 @@ fn simulate_on(
     mode: Mode<'_, '_>,
     options: &ExecOptions,
 ) -> Result<(RunReport, RunLog), SessionError> {
-    let mut log = RunLog::default();
+    let mut log = RunLog::tapped(options.tap.as_ref(), None);
     let log_ref = if options.log { Some(&mut log) } else { None };
     let report = match mode {
         Mode::Skill(bound) => run_skill(bound, rig, options, log_ref)?,
@@ -212,7 +212,7 @@ fn task_on(
                 prepose: first && options.prepose,
                 ..options.clone()
             };
-            let mut log = RunLog::default();
+            let mut log = RunLog::tapped(options.tap.as_ref(), Some(&step.name));
             let report = run_skill(&task_step.bound, rig, &step_options, options.log.then_some(&mut log))?;
             Ok::<_, ExecError>(StepReport {
                 step: step.name.clone(),

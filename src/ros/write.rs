@@ -128,6 +128,9 @@ impl Bag {
             // zstd level 1: 12 % fewer instructions for writing a run log than the default
             // level 3, and no larger a file (slide: 4.96 MB against 5.00 MB).
             .compression_level(1)
+            // Compressed on the writer's own thread: a run log is encoded beside the run
+            // (src/run_log.rs), whose one core zstd's workers would otherwise take turns with.
+            .compression_threads(0)
             .create(Cursor::new(Vec::new()))
             .map_err(BagError::Write)?;
         let mut ids = BTreeMap::new();

@@ -245,3 +245,54 @@ fn without_a_plant_the_run_says_what_to_start() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("tcp/HOST:PORT"));
 }
+
+#[test]
+fn a_plant_that_falls_silent_ends_the_run_in_a_named_failure_with_its_log() {
+    let dir = scratch("silent");
+    let learned = dir.join("touch.learned.json");
+    let learn = skillc()
+        .args(["learn", "stdlib-skills/touch.skill", "examples/demos/touch.csv", "-q", "-o"])
+        .arg(&learned)
+        .status()
+        .expect("learns");
+    assert!(learn.success());
+    let endpoint = endpoint();
+    let mut plant = Plant::start("examples/scenes/table.toml", &endpoint);
+    let log = dir.join("log.csv");
+    // A slow touch (a quarter of the demonstrated speed): tens of thousands of lockstep ticks,
+    // seconds of them after the plant is killed below.
+    let run = skillc()
+        .args(["run", "stdlib-skills/touch.skill", "--scene", "examples/scenes/table.toml", "--speed", "0.25"])
+        .arg("--learned")
+        .arg(&learned)
+        .args(["--plant", &endpoint, "--lockstep", "-o"])
+        .arg(&log)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs");
+    std::thread::sleep(Duration::from_secs(2));
+    // Killed, not stopped: no goodbye, the link just falls silent.
+    if let Some(child) = plant.0.as_mut() {
+        child.kill().expect("kills the plant");
+        let _ = child.wait();
+    }
+    plant.0 = None;
+    let began = Instant::now();
+    let output = run.wait_with_output().expect("the run ends");
+    let text = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        began.elapsed() < Duration::from_secs(30),
+        "the run ended {:.1} s after the plant was killed",
+        began.elapsed().as_secs_f64()
+    );
+    assert_eq!(output.status.code(), Some(1), "a failure, not an error: {text}\n{stderr}");
+    assert!(
+        text.contains("FAILURE") && text.contains("plant_link: the link to the plant failed in state"),
+        "{text}\n{stderr}"
+    );
+    let rows = std::fs::read_to_string(&log).expect("the log up to the loss").lines().count();
+    assert!(rows > 500, "{rows} rows");
+    let _ = std::fs::remove_dir_all(&dir);
+}

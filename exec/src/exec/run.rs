@@ -324,6 +324,19 @@ fn finish(
             };
             stopped(message, None)
         }
+        // A plant in another process that fell silent: the run cannot go on; a plant still
+        // running stops the arm on its own side when commands stop (docs/split.md). A failure
+        // of the run with its reason, not an error: the ticks up to it are the run's log.
+        Err(ExecError::Plant {
+            state,
+            t_s,
+            source: PlantError::Link { reason, .. },
+        }) => stopped(
+            format!(
+                "{PLANT_LINK}: the link to the plant failed in state `{state}` at t = {t_s:.3} s: {reason}; a plant still running brings the arm to its damped stop when commands stop coming"
+            ),
+            None,
+        ),
         Err(other) => return Err(other),
     };
     report.safety = rig.safety_stats().clone();
@@ -343,6 +356,9 @@ fn finish(
 
 /// The word a failure of the contact witness's rules starts with, and the reason eval gives it.
 pub const CONTACT_WITNESS: &str = "contact_witness";
+
+/// The word the failure of a run whose plant (in another process) fell silent starts with.
+pub const PLANT_LINK: &str = "plant_link";
 
 fn skill_loop(
     bound: &BoundSkill<'_>,

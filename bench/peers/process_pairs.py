@@ -11,10 +11,17 @@ moves both alike; the median of the per-round ratios is printed with its range.
          on the standardised position and force, against `skillc learn` of the slide template
          with `connectivity: 5` (the same ±5 neighbourhood);
   dmp:   pandas.read_csv + movement_primitives DMP(n_dims=3, n_weights_per_dim=50).imitate on
-         the positions, against the same `skillc learn` (which fits three DMPs, and more).
+         the positions, against `skillc learn` of a template with one segment and one 50-basis
+         motion (FOLLOW below: a position and an orientation DMP, their reconstruction check,
+         and what every learn does: the wrench's frame, sign and bias, the contact phases);
+  cpd:   pandas.read_csv + ruptures KernelCPD(linear, min_size=2).predict(n_bkps=10) on the force
+         of a demonstration whose force steps through 11 levels (learn_cluster.rs's 1-D signal,
+         10 breaks), against `skillc learn` of a template cutting it by CHAMP into 11 segments
+         (LEVELS below); both must find the 10 true breaks. `cpd` gives ruptures the count of
+         breaks (n_bkps = 10, dynamic programming), `pelt` a penalty (pen = 100, PELT).
 
 Usage: process_pairs.py SKILLC [ROUNDS] [SIZES...]  (in a venv with numpy, pandas,
-scikit-learn, movement_primitives; never needed by the build or the tests)
+scikit-learn, movement_primitives, ruptures; never needed by the build or the tests)
 """
 
 import os
@@ -24,13 +31,50 @@ import sys
 import tempfile
 import time
 
+import json
+
 import numpy as np
 import pandas as pd
+import ruptures as rpt
 from movement_primitives.dmp import DMP
 from sklearn.cluster import AgglomerativeClustering
 from sklearn.neighbors import kneighbors_graph
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from data import steps_1d  # noqa: E402
+
+FOLLOW = """skill follow_path {
+    learn {
+        segments = none
+        motion path = dmp(segment 1, basis: 50)
+    }
+    state go {
+        move path from current
+        control position all in base
+        on motion_done -> done
+        on timeout 60 s -> lost
+    }
+    terminal done: success
+    terminal lost: failure "the motion did not finish"
+}
+"""
+
+LEVELS = """skill levels {
+    learn {
+        segments = changepoint(min_length: 200 ms, models: [constant], particles: 100, features: [force_magnitude]) expect 11
+        motion path = dmp(segment 1, basis: 10)
+    }
+    state go {
+        move path from current
+        control position all in base
+        on motion_done -> done
+        on timeout 60 s -> lost
+    }
+    terminal done: success
+    terminal lost: failure "the motion did not finish"
+}
+"""
 
 
 def write_demo(path, n):
@@ -75,10 +119,57 @@ def dmp(path):
     return model
 
 
+def write_levels(path):
+    """A still tool pressing with a force that steps through 11 levels: fz = 5 N + the signal."""
+    signal, breaks = steps_1d()
+    n = len(signal)
+    t = np.arange(n) * 1e-3
+    rng = np.random.default_rng(3)
+    pos = np.tile([0.5, 0.0, 0.2], (n, 1)) + 1e-5 * rng.standard_normal((n, 3))
+    q = np.tile([0.0, 1.0, 0.0, 0.0], (n, 1))
+    force = np.zeros((n, 3))
+    force[:, 2] = signal[:, 0] + 5.0
+    data = np.concatenate([t[:, None], pos, q, force, np.zeros((n, 3))], axis=1)
+    np.savetxt(path, data, delimiter=",", fmt="%.6f", comments="",
+               header="t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,mx,my,mz")
+    return breaks
+
+
+def cpd(path):
+    frame = pd.read_csv(path)
+    signal = frame[["fz"]].to_numpy()
+    return rpt.KernelCPD(kernel="linear", min_size=2).fit(signal).predict(n_bkps=10)[:-1]
+
+
+def cpd_pen(path):
+    """The same with a penalty instead of the count (PELT, ruptures_kernelcpd.py's pen = 100)."""
+    frame = pd.read_csv(path)
+    signal = frame[["fz"]].to_numpy()
+    return rpt.KernelCPD(kernel="linear", min_size=2).fit(signal).predict(pen=100.0)[:-1]
+
+
 def skillc_learn(skillc, template, path, out):
     started = time.perf_counter()
     subprocess.run([skillc, "learn", template, path, "-o", out, "-q"], check=True)
     return time.perf_counter() - started
+
+
+def pair(name, n, peer, skillc, template, path, out, rounds):
+    """Rounds of the peer then `skillc learn`, back to back; prints the medians and ratios."""
+    peers, ours, ratios = [], [], []
+    for _ in range(rounds):
+        started = time.perf_counter()
+        peer(path)
+        p = time.perf_counter() - started
+        s = skillc_learn(skillc, template, path, out)
+        peers.append(p)
+        ours.append(s)
+        ratios.append(p / s)
+    print(f"{name:5} {n:>7} samples: peer {statistics.median(peers) * 1e3:9.1f} ms, "
+          f"skillc learn {statistics.median(ours) * 1e3:8.1f} ms, per-round ratio median "
+          f"{statistics.median(ratios):6.2f} (range {min(ratios):.2f}-{max(ratios):.2f}), "
+          f"ratio of medians {statistics.median(peers) / statistics.median(ours):.2f}",
+          flush=True)
 
 
 def main():
@@ -86,31 +177,33 @@ def main():
     rounds = int(sys.argv[2]) if len(sys.argv) > 2 else 3
     sizes = [int(s) for s in sys.argv[3:]] or [10_000, 50_000]
     folder = tempfile.mkdtemp(prefix="skillc-process-pairs-")
-    template = os.path.join(folder, "slide5.skill")
+    templates = {}
     with open(os.path.join(ROOT, "stdlib-skills", "slide.skill")) as f:
-        text = f.read().replace("connectivity: 10", "connectivity: 5")
-    with open(template, "w") as f:
-        f.write(text)
+        templates["ward"] = f.read().replace("connectivity: 10", "connectivity: 5")
+    templates["dmp"] = FOLLOW
+    templates["cpd"] = LEVELS
+    for name, text in templates.items():
+        with open(os.path.join(folder, f"{name}.skill"), "w") as f:
+            f.write(text)
+    out = os.path.join(folder, "learned.json")
     for n in sizes:
         path = os.path.join(folder, f"demo_{n}.csv")
         write_demo(path, n)
         for name, peer in [("ward", ward), ("dmp", dmp)]:
             if name == "dmp" and n != 10_000:
                 continue
-            peers, ours, ratios = [], [], []
-            for _ in range(rounds):
-                started = time.perf_counter()
-                peer(path)
-                p = time.perf_counter() - started
-                s = skillc_learn(skillc, template, path, os.path.join(folder, "learned.json"))
-                peers.append(p)
-                ours.append(s)
-                ratios.append(p / s)
-            print(f"{name:5} {n:>7} samples: peer {statistics.median(peers) * 1e3:9.1f} ms, "
-                  f"skillc learn {statistics.median(ours) * 1e3:8.1f} ms, per-round ratio median "
-                  f"{statistics.median(ratios):6.2f} (range {min(ratios):.2f}-{max(ratios):.2f}), "
-                  f"ratio of medians {statistics.median(peers) / statistics.median(ours):.2f}",
-                  flush=True)
+            pair(name, n, peer, skillc, os.path.join(folder, f"{name}.skill"), path, out, rounds)
+    levels = os.path.join(folder, "levels.csv")
+    breaks = write_levels(levels)
+    found = [int(b) for b in cpd(levels)]
+    found_pen = [int(b) for b in cpd_pen(levels)]
+    skillc_learn(skillc, os.path.join(folder, "cpd.skill"), levels, out)
+    with open(out) as f:
+        ours = [segment["start_index"] for segment in json.load(f)["segments"][1:]]
+    print(f"cpd: the 10 true breaks {breaks}; ruptures found them: {found == breaks} (n_bkps), "
+          f"{found_pen == breaks} (pen); skillc found them: {ours == breaks}")
+    pair("cpd", 10_000, cpd, skillc, os.path.join(folder, "cpd.skill"), levels, out, rounds)
+    pair("pelt", 10_000, cpd_pen, skillc, os.path.join(folder, "cpd.skill"), levels, out, rounds)
 
 
 if __name__ == "__main__":

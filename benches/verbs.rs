@@ -185,14 +185,16 @@ fn main() {
         }
         args
     };
+    // The logs go to the bench folder (the run cases run from the repository root).
+    let (csv_log, mcap_log) = (dir.join("log.csv"), dir.join("log.mcap"));
     for (name, output) in [
         ("run slide, no log", None),
-        ("run slide, CSV log", Some("log.csv")),
-        ("run slide, MCAP log", Some("log.mcap")),
+        ("run slide, CSV log", Some(csv_log.display().to_string())),
+        ("run slide, MCAP log", Some(mcap_log.display().to_string())),
     ] {
         cases.push(Case {
             name: name.to_string(),
-            args: run(output),
+            args: run(output.as_deref()),
             samples: None,
             ticks: Some(ticks),
         });

@@ -251,7 +251,13 @@ fn a_plant_that_falls_silent_ends_the_run_in_a_named_failure_with_its_log() {
     let dir = scratch("silent");
     let learned = dir.join("touch.learned.json");
     let learn = skillc()
-        .args(["learn", "stdlib-skills/touch.skill", "examples/demos/touch.csv", "-q", "-o"])
+        .args([
+            "learn",
+            "stdlib-skills/touch.skill",
+            "examples/demos/touch.csv",
+            "-q",
+            "-o",
+        ])
         .arg(&learned)
         .status()
         .expect("learns");
@@ -262,7 +268,14 @@ fn a_plant_that_falls_silent_ends_the_run_in_a_named_failure_with_its_log() {
     // A slow touch (a quarter of the demonstrated speed): tens of thousands of lockstep ticks,
     // seconds of them after the plant is killed below.
     let run = skillc()
-        .args(["run", "stdlib-skills/touch.skill", "--scene", "examples/scenes/table.toml", "--speed", "0.25"])
+        .args([
+            "run",
+            "stdlib-skills/touch.skill",
+            "--scene",
+            "examples/scenes/table.toml",
+            "--speed",
+            "0.25",
+        ])
         .arg("--learned")
         .arg(&learned)
         .args(["--plant", &endpoint, "--lockstep", "-o"])
@@ -287,12 +300,19 @@ fn a_plant_that_falls_silent_ends_the_run_in_a_named_failure_with_its_log() {
         "the run ended {:.1} s after the plant was killed",
         began.elapsed().as_secs_f64()
     );
-    assert_eq!(output.status.code(), Some(1), "a failure, not an error: {text}\n{stderr}");
+    assert_eq!(
+        output.status.code(),
+        Some(1),
+        "a failure, not an error: {text}\n{stderr}"
+    );
     assert!(
         text.contains("FAILURE") && text.contains("plant_link: the link to the plant failed in state"),
         "{text}\n{stderr}"
     );
-    let rows = std::fs::read_to_string(&log).expect("the log up to the loss").lines().count();
+    let rows = std::fs::read_to_string(&log)
+        .expect("the log up to the loss")
+        .lines()
+        .count();
     assert!(rows > 500, "{rows} rows");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -33,5 +33,6 @@ pub use log::{csv as logs_csv, CsvLog, JointValues, LogTap, RunLog, TapEvent, Ti
 pub use motion::offset_to_place;
 pub use rig::Rig;
 pub use run::{
-    replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit, CONTACT_WITNESS, LOST_CONTACT, PLANT_LINK,
+    replay_state, run_replay, run_skill, ExecError, ExecOptions, RunReport, Visit, CONTACT_WITNESS, LOST_CONTACT,
+    PLANT_LINK,
 };

@@ -420,3 +420,70 @@ fn wipe_learns_its_four_strokes_and_reproduces_them_or_as_many_as_asked() {
         assert_sane(&log);
     }
 }
+
+/// The contour's arc as one position-controlled motion run twice in free air, its compliant
+/// frame the contour's per-sample frame.
+const CONTOUR_TWICE: &str = r#"skill contour_twice {
+    learn {
+        segments = cluster(linkage: ward, connectivity: 10, cut: count(3), min_length: 200 ms, features: [force_magnitude])
+        frame normal = force_aligned(segment 2)
+        motion follow = dmp(segment 2, basis: 80)
+    }
+
+    state follow {
+        move follow from current
+        repeat 2
+        control position all in normal
+        on motion_done -> done
+        on timeout 60 s -> lost
+    }
+
+    terminal done: success
+    terminal lost: failure "the motion did not finish"
+}
+"#;
+
+#[test]
+fn a_repeated_motion_replays_its_per_sample_frames_with_each_run() {
+    let dir = std::env::temp_dir().join(format!("skillc-contour-twice-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("folder");
+    let file = dir.join("contour_twice.skill");
+    std::fs::write(&file, CONTOUR_TWICE).expect("written");
+    let Ok((_, skill)) = skillc::load::load_skill(&file, None) else {
+        panic!("compiles")
+    };
+    let demo = root().join("examples/demos/contour.csv");
+    let learned = skillc::load::learn_from_files(&skill, &demo, &LearnOptions::default()).expect("learns");
+    // The table far below: the arc runs in the air.
+    let (report, log, _) = run(&skill, &learned, "table.toml", &["table.z=-0.5"], false);
+    assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);
+    let frame = &learned.frames["normal"];
+    let duration = learned.segments[1].end_s - learned.segments[1].start_s;
+    let z_at = |t: f64| frame.at(t).rotation * nalgebra::Vector3::z();
+    assert!(
+        z_at(0.05).angle(&z_at(duration)).to_degrees() > 10.0,
+        "the frame turns along the arc"
+    );
+    let follow = log
+        .states
+        .iter()
+        .position(|name| name == "follow")
+        .expect("a follow state") as u32;
+    let ticks: Vec<_> = log.ticks.iter().filter(|tick| tick.state == follow).collect();
+    let entered = ticks.first().expect("the state ran").t_s;
+    let logged_z = |t: f64| {
+        let tick = ticks
+            .iter()
+            .min_by(|a, b| (a.t_s - t).abs().total_cmp(&(b.t_s - t).abs()))
+            .expect("ticks");
+        nalgebra::Vector3::from(tick.frame_z())
+    };
+    for since in [0.05, duration / 3.0, 0.6 * duration] {
+        let expected = z_at(since);
+        for (run, start) in [(1, entered), (2, entered + duration)] {
+            let error = logged_z(start + since).angle(&expected).to_degrees();
+            assert!(error < 1.0, "run {run}, {since:.2} s in: the frame is {error:.2}° off");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -78,8 +78,9 @@ pub(super) struct Machine<'b, 'a> {
     /// Guarded approach of the current state: near its motion's goal, where contact is expected,
     /// the motion slows to a contact-safe speed.
     guarded: Option<GuardedApproach>,
-    /// Time the current state's motion has run on its own clock \[s\] (slower than the run's
-    /// during a guarded approach): per-sample frames follow the motion, not the wall clock.
+    /// Time the current run of the state's motion has run on its own clock \[s\] (slower than
+    /// the run's during a guarded approach): per-sample frames follow the motion, not the wall
+    /// clock, and start again with each run of a `repeat`.
     motion_clock_s: f64,
     /// Lift-off of the current state from the contact it was entered in, if any.
     lift: Option<LiftOff>,
@@ -1105,6 +1106,9 @@ impl<'b, 'a> Machine<'b, 'a> {
             motion.rollout = rollout;
             motion.run = run;
         }
+        // Each run replays its segment from the start, and its per-sample frames with it (a
+        // strokes motion times them by its stroke instead: `strokes_demo_time_s`).
+        self.motion_clock_s = 0.0;
         Ok(())
     }
 

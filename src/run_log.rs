@@ -1,10 +1,11 @@
 //! Writing a run's log (`skillc run -o`): CSV or MCAP as the file's name says, encoded on a
 //! thread of its own while the run goes on, or after it.
 //!
-//! A run on this machine steps the arm on one core; its log, encoded after the run, cost a
-//! CSV log 2 µs and an MCAP log 6 µs a tick on top. Live, the run's [`LogTap`] hands the ticks
-//! over in batches as they are logged and a writer thread encodes them on the other core, so
-//! that the file is ready soon after the last tick. The bytes are the same either way (both
+//! A run steps the arm on one core; its log, encoded after the run, cost 2.7 µs a tick on top
+//! as CSV and 8.0 µs as MCAP (the slide on the 2-core machine this was built on). Live, the
+//! run's [`LogTap`] hands the ticks over in batches as they are logged and a writer thread
+//! encodes them on the other core, so that the file is ready soon after the last tick (0.9 and
+//! 1.6 µs a tick on top, most of it the file's write at the end: benches/README.md). The bytes are the same either way (both
 //! go through [`CsvLog`] and [`crate::ros::RunLogWriter`]), and the file is written
 //! atomically at the end: a run that fails to start writes nothing.
 

@@ -384,11 +384,19 @@ fn summary_under(heading: &str, report: &RunReport, log: &RunLog) -> String {
     out
 }
 
-/// Refuses `-o` when it is a file read so far (imports, the scene's robot, ...), before the run.
+/// Refuses `-o` when it is a file read so far (imports, the scene's robot, ...) or lies in a folder
+/// that does not exist, before the run.
 fn refuse_noted_output(args: &RunArgs) -> Result<(), Failure> {
-    match &args.output {
-        Some(out) => atomic::refuse_inputs(out, "-o", &[]).map_err(Failure::Usage),
-        None => Ok(()),
+    let Some(out) = &args.output else { return Ok(()) };
+    atomic::refuse_inputs(out, "-o", &[]).map_err(Failure::Usage)?;
+    // Said before the run, not after it: a run may take minutes.
+    match out.parent().filter(|dir| !dir.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => Err(Failure::Usage(format!(
+            "cannot write `{}`: the folder `{}` does not exist; create it or choose another -o",
+            out.display(),
+            dir.display()
+        ))),
+        _ => Ok(()),
     }
 }
 

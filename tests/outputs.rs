@@ -350,3 +350,47 @@ fn the_report_opens_on_whether_it_worked() {
     assert!(html[failures..].contains("reflex:contact_force"), "the reason");
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
+
+#[test]
+fn a_run_log_into_a_folder_that_does_not_exist_is_refused_before_the_run() {
+    let dir = workspace("no-folder");
+    for (args, what) in [
+        (
+            vec![
+                "run",
+                "stdlib-skills/touch.skill",
+                "--demo",
+                "examples/demos/touch.csv",
+                "--scene",
+                "examples/scenes/table.toml",
+            ],
+            "a skill",
+        ),
+        (
+            vec![
+                "run",
+                "examples/tasks/inspect_and_press.skill",
+                "--scene",
+                "examples/scenes/workcell.toml",
+            ],
+            "a task",
+        ),
+    ] {
+        for log in ["missing/log.csv", "missing/log.mcap"] {
+            let mut args = args.clone();
+            args.extend(["-o", log]);
+            let out = skillc(&dir, &args);
+            assert_eq!(out.status.code(), Some(2), "{what}, {log}: {}", stderr(&out));
+            assert!(
+                stderr(&out).contains("the folder `missing` does not exist"),
+                "{what}, {log}: {}",
+                stderr(&out)
+            );
+            // Nothing ran: no summary of a run, no verdict.
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            assert!(!stdout.contains("simulated") && !stdout.contains("success"), "{stdout}");
+            assert!(!dir.join("missing").exists());
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

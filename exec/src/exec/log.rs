@@ -121,7 +121,7 @@ impl<const N: usize> std::fmt::Debug for JointValues<N> {
 }
 
 /// Every tick of a run, with the names of the states ticks refer to.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Default)]
 pub struct RunLog {
     /// State names (`prepose`, `replay:<motion>` and the skill's states).
     pub states: Vec<String>,
@@ -132,11 +132,22 @@ pub struct RunLog {
 }
 
 /// A log's place on a tap: the tap, the log's number on it and how many ticks have been sent.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct Tapped {
     tap: LogTap,
     log: usize,
     sent: usize,
+}
+
+/// A copy holds the states and ticks, not the tap: only the log being recorded sends them on.
+impl Clone for RunLog {
+    fn clone(&self) -> Self {
+        RunLog {
+            states: self.states.clone(),
+            ticks: self.ticks.clone(),
+            tap: None,
+        }
+    }
 }
 
 /// Two logs are equal when their states and ticks are: a tap is where they went, not what
@@ -244,8 +255,8 @@ impl RunLog {
         }
     }
 
-    /// Sends the ticks not yet sent and lets go of the tap, and gives back memory reserved for ticks never logged: the
-    /// log is complete.
+    /// Sends the ticks not yet sent and lets go of the tap, and gives back memory reserved for
+    /// ticks never logged: the log is complete.
     pub(crate) fn finish(&mut self) {
         self.send_rest();
         self.tap = None;
@@ -540,6 +551,11 @@ mod tests {
         tap.end();
         drop(tap);
         assert!(untapped.tap.is_none() && skill.tap.is_none() && step.tap.is_none());
+        let (other, _events) = LogTap::channel();
+        let mut recording = RunLog::tapped(Some(&other), None);
+        recording.ticks.push(tick_at(0.0, 0));
+        assert!(recording.clone().tap.is_none(), "a copy sends nothing on");
+        assert_eq!(recording.clone(), recording);
 
         let events: Vec<TapEvent> = events.iter().collect();
         let mut rebuilt = CsvLog::default();

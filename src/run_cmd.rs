@@ -246,7 +246,6 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         |robot, plant| run_on_plant(&scene, robot, plant, mode, &options),
         || simulate(&scene, mode, &options),
     )?;
-    drop(options);
     if let Some(path) = &args.output {
         match live {
             Some(live) => live.finish(path)?,

@@ -57,18 +57,14 @@ impl LiveLog {
 
 /// Encodes the events of a tap until its end (or until every sender has gone).
 fn encode(mut encoder: Encoder, events: &Receiver<TapEvent>) -> Result<Vec<u8>, String> {
-    let mut step: Option<String> = None;
     let mut failed = None;
     while let Ok(event) = events.recv() {
         match event {
-            TapEvent::Log { step: started, .. } => {
-                encoder.start_log(started.clone());
-                step = started;
-            }
+            TapEvent::Log { step, .. } => encoder.start_log(step),
             TapEvent::Ticks { states, ticks, .. } => {
                 // After an error the rest is drained unencoded; the first error is the one told.
                 if failed.is_none() {
-                    failed = encoder.push(step.as_deref(), &states, &ticks).err();
+                    failed = encoder.push(&states, &ticks).err();
                 }
             }
             TapEvent::End => break,
@@ -86,7 +82,7 @@ pub fn write_after(path: &Path, logs: &[(Option<&str>, &RunLog)], scene: &Scene)
     let wrap = |err: String| Failure::Usage(format!("cannot write `{}`: {err}", path.display()));
     for (step, log) in logs {
         encoder.start_log(step.map(str::to_owned));
-        encoder.push(*step, &log.states, &log.ticks).map_err(wrap)?;
+        encoder.push(&log.states, &log.ticks).map_err(wrap)?;
     }
     let bytes = encoder.finish().map_err(wrap)?;
     write_file(path, &bytes)
@@ -123,23 +119,16 @@ impl Encoder {
 
     fn start_log(&mut self, step: Option<String>) {
         match self {
-            Encoder::Csv(_) => {}
+            Encoder::Csv(csv) => csv.start_log(step),
             #[cfg(feature = "mcap")]
             Encoder::Mcap(mcap) => mcap.start_log(step),
         }
-        #[cfg(not(feature = "mcap"))]
-        let _ = step;
     }
 
-    fn push(
-        &mut self,
-        step: Option<&str>,
-        states: &[String],
-        ticks: &[skill_runtime::exec::Tick],
-    ) -> Result<(), String> {
+    fn push(&mut self, states: &[String], ticks: &[skill_runtime::exec::Tick]) -> Result<(), String> {
         match self {
             Encoder::Csv(csv) => {
-                csv.push(step, states, ticks);
+                csv.push(states, ticks);
                 Ok(())
             }
             #[cfg(feature = "mcap")]

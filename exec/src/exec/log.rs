@@ -381,67 +381,39 @@ fn push_fixed(out: &mut Vec<u8>, value: f64, precision: usize) {
 /// Consecutive logs as one CSV (a task's steps on one robot): each row's state is written
 /// `<step>/<state>` for a log given with a step name.
 pub fn csv(logs: &[(Option<&str>, &RunLog)]) -> String {
-    let first = logs.iter().find_map(|(_, log)| log.ticks.first());
-    let dof = first.map_or(0, |t| t.torques.len());
-    let rows: usize = logs.iter().map(|(_, log)| log.ticks.len()).sum();
-    let mut out: Vec<u8> = Vec::with_capacity(rows * 400);
-    csv_header(&mut out, dof);
-    // The rows are formatted in pieces side by side (a minute's log is 60 000 rows of 60
-    // numbers), each piece a run of one log's ticks, and joined in order.
-    let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-    let per_piece = rows.div_ceil(threads.clamp(1, 4)).max(CSV_PIECE_ROWS);
-    let pieces: Vec<(Option<&str>, &RunLog, &[Tick])> = logs
-        .iter()
-        .flat_map(|&(step, log)| log.ticks.chunks(per_piece).map(move |ticks| (step, log, ticks)))
-        .collect();
-    if pieces.len() <= 1 {
-        for &(step, log, ticks) in &pieces {
-            csv_rows(&mut out, step, &log.states, ticks);
-        }
-    } else {
-        let written: Vec<Vec<u8>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = pieces
-                .iter()
-                .map(|&(step, log, ticks)| {
-                    scope.spawn(move || {
-                        let mut out = Vec::with_capacity(ticks.len() * 400);
-                        csv_rows(&mut out, step, &log.states, ticks);
-                        out
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|handle| handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
-                .collect()
-        });
-        for piece in written {
-            out.extend_from_slice(&piece);
-        }
+    let mut out = CsvLog::default();
+    for (step, log) in logs {
+        out.start_log(step.map(str::to_owned));
+        out.push(&log.states, &log.ticks);
     }
-    String::from_utf8(out).expect("the log is ASCII numbers and the skill's UTF-8 state and step names")
+    out.finish()
 }
 
-/// Rows a piece of the CSV log holds at least, so that a short log is written on one thread.
-const CSV_PIECE_ROWS: usize = 4096;
-
-/// A CSV log written as its ticks arrive (through a [`LogTap`]): the text [`csv`] makes of
-/// the whole logs.
+/// A CSV log written as its ticks arrive (through a [`LogTap`]), or of whole logs ([`csv`]).
 #[derive(Debug, Default)]
 pub struct CsvLog {
     out: Vec<u8>,
     header: bool,
+    /// The task step of the log being written.
+    step: Option<String>,
 }
 
 impl CsvLog {
-    /// Appends the rows of `ticks`, the next ticks of a log with `states` (of task step `step`).
-    pub fn push(&mut self, step: Option<&str>, states: &[String], ticks: &[Tick]) {
+    /// The next ticks are the next log's, of task step `step` (its rows' states written
+    /// `step/state`).
+    pub fn start_log(&mut self, step: Option<String>) {
+        self.step = step;
+    }
+
+    /// Appends the rows of `ticks`, the next ticks of the current log, whose state names are
+    /// `states`.
+    pub fn push(&mut self, states: &[String], ticks: &[Tick]) {
         let Some(first) = ticks.first() else { return };
         if !self.header {
             csv_header(&mut self.out, first.torques.len());
             self.header = true;
         }
-        csv_rows(&mut self.out, step, states, ticks);
+        csv_rows(&mut self.out, self.step.as_deref(), states, ticks);
     }
 
     /// The whole text.
@@ -559,19 +531,18 @@ mod tests {
 
         let events: Vec<TapEvent> = events.iter().collect();
         let mut rebuilt = CsvLog::default();
-        let mut current = None;
         let mut batches = Vec::new();
         for event in &events {
             match event {
                 TapEvent::Log { log, step } => {
                     assert_eq!(*log, batches.len(), "logs are numbered as they start");
                     batches.push(0);
-                    current = step.clone();
+                    rebuilt.start_log(step.clone());
                 }
                 TapEvent::Ticks { log, states, ticks } => {
                     assert_eq!(*log + 1, batches.len(), "a log's ticks come after it started");
                     batches[*log] += 1;
-                    rebuilt.push(current.as_deref(), states, ticks);
+                    rebuilt.push(states, ticks);
                 }
                 TapEvent::End => {}
             }
@@ -582,20 +553,6 @@ mod tests {
         assert_eq!(rebuilt.finish(), whole);
         assert!(whole.contains(",press/approach,") && whole.contains(",press,"));
         assert_eq!(CsvLog::default().finish(), csv(&[]), "no ticks: the header alone");
-    }
-
-    #[test]
-    fn a_long_log_formatted_in_pieces_reads_as_one_formatted_in_order() {
-        let mut long = RunLog::default();
-        log_ticks(&mut long, 3 * super::CSV_PIECE_ROWS + 5, 0.0);
-        let mut short = RunLog::default();
-        log_ticks(&mut short, 30, 0.0);
-        let mut sequential = CsvLog::default();
-        sequential.push(None, &long.states, &long.ticks);
-        sequential.push(Some("s"), &short.states, &short.ticks);
-        let text = csv(&[(None, &long), (Some("s"), &short)]);
-        assert_eq!(text.lines().count(), 1 + long.ticks.len() + short.ticks.len());
-        assert_eq!(text, sequential.finish());
     }
 
     /// The frame's z axis and the desired force in base axes equal what nalgebra's rotation of

@@ -415,9 +415,15 @@ struct Piece {
     error: Option<DemoError>,
 }
 
-/// Reads the rows of `text`, the file from line `first_line` on.
-fn read_piece(mut reader: ::csv::Reader<&[u8]>, text: &str, first_line: usize, layout: &Layout<'_>) -> Piece {
-    let mut rows = Rows::with_capacity(layout.file, newlines(text.as_bytes()) + 1);
+/// Reads the rows of `text`, the file from line `first_line` on, holding `lines` newlines.
+fn read_piece(
+    mut reader: ::csv::Reader<&[u8]>,
+    text: &str,
+    first_line: usize,
+    lines: usize,
+    layout: &Layout<'_>,
+) -> Piece {
+    let mut rows = Rows::with_capacity(layout.file, lines + 1);
     let error = rows.read(&mut reader, text, first_line, layout).err();
     Piece { rows, error }
 }
@@ -550,18 +556,22 @@ fn parse_in_pieces<'t>(
     let body = &text[body_start..];
     let first_line = 1 + newlines(&text.as_bytes()[..body_start]);
     let pieces = pieces_of(body, pieces);
+    // Each piece's newlines, counted once: its first line in the file, and its rows at most.
+    let lines: Vec<usize> = pieces.iter().map(|piece| newlines(piece.as_bytes())).collect();
+    let mut first_lines = Vec::with_capacity(pieces.len());
+    let mut line = first_line;
+    for count in &lines {
+        first_lines.push(line);
+        line += count;
+    }
     let read: Vec<Piece> = if pieces.len() == 1 {
-        vec![read_piece(reader(body), body, first_line, &layout)]
+        vec![read_piece(reader(body), body, first_line, lines[0], &layout)]
     } else {
         std::thread::scope(|scope| {
-            let mut line = first_line;
-            let handles: Vec<_> = pieces
-                .iter()
-                .map(|&piece| {
-                    let from = line;
-                    line += newlines(piece.as_bytes());
-                    let layout = &layout;
-                    scope.spawn(move || read_piece(reader(piece), piece, from, layout))
+            let handles: Vec<_> = (0..pieces.len())
+                .map(|k| {
+                    let (piece, from, count, layout) = (pieces[k], first_lines[k], lines[k], &layout);
+                    scope.spawn(move || read_piece(reader(piece), piece, from, count, layout))
                 })
                 .collect();
             handles

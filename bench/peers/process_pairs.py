@@ -44,37 +44,33 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from data import steps_1d  # noqa: E402
 
-FOLLOW = """skill follow_path {
-    learn {
-        segments = none
-        motion path = dmp(segment 1, basis: 50)
-    }
-    state go {
+def one_motion_skill(name, segments, basis):
+    """A template with the segmentation `segments` and one motion over its first segment."""
+    return f"""skill {name} {{
+    learn {{
+        segments = {segments}
+        motion path = dmp(segment 1, basis: {basis})
+    }}
+    state go {{
         move path from current
         control position all in base
         on motion_done -> done
         on timeout 60 s -> lost
-    }
+    }}
     terminal done: success
     terminal lost: failure "the motion did not finish"
-}
+}}
 """
 
-LEVELS = """skill levels {
-    learn {
-        segments = changepoint(min_length: 200 ms, models: [constant], particles: 100, features: [force_magnitude]) expect 11
-        motion path = dmp(segment 1, basis: 10)
-    }
-    state go {
-        move path from current
-        control position all in base
-        on motion_done -> done
-        on timeout 60 s -> lost
-    }
-    terminal done: success
-    terminal lost: failure "the motion did not finish"
-}
-"""
+
+# The DMP fit alone: one segment, one 50-basis motion.
+FOLLOW = one_motion_skill("follow_path", "none", 50)
+# Change points of the force alone: CHAMP cutting the demonstration into its 11 levels.
+LEVELS = one_motion_skill(
+    "levels",
+    "changepoint(min_length: 200 ms, models: [constant], particles: 100, features: [force_magnitude]) expect 11",
+    10,
+)
 
 
 def write_demo(path, n):
@@ -135,17 +131,18 @@ def write_levels(path):
     return breaks
 
 
+def levels_signal(path):
+    """The force of a levels demonstration, as ruptures takes it."""
+    return pd.read_csv(path)[["fz"]].to_numpy()
+
+
 def cpd(path):
-    frame = pd.read_csv(path)
-    signal = frame[["fz"]].to_numpy()
-    return rpt.KernelCPD(kernel="linear", min_size=2).fit(signal).predict(n_bkps=10)[:-1]
+    return rpt.KernelCPD(kernel="linear", min_size=2).fit(levels_signal(path)).predict(n_bkps=10)[:-1]
 
 
 def cpd_pen(path):
     """The same with a penalty instead of the count (PELT, ruptures_kernelcpd.py's pen = 100)."""
-    frame = pd.read_csv(path)
-    signal = frame[["fz"]].to_numpy()
-    return rpt.KernelCPD(kernel="linear", min_size=2).fit(signal).predict(pen=100.0)[:-1]
+    return rpt.KernelCPD(kernel="linear", min_size=2).fit(levels_signal(path)).predict(pen=100.0)[:-1]
 
 
 def skillc_learn(skillc, template, path, out):

@@ -186,9 +186,13 @@ fn run_writes_its_log_as_mcap_with_one_message_per_tick() {
             RunLogTopics::TF | RunLogTopics::CONTACT_FORCE => {
                 assert_eq!(payloads.len(), ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS), "{topic}")
             }
-            RunLogTopics::TF_STATIC | RunLogTopics::ROBOT_DESCRIPTION | RunLogTopics::SCENE => {
-                assert_eq!(payloads.len(), 1, "{topic}")
-            }
+            RunLogTopics::TF_STATIC | RunLogTopics::ROBOT_DESCRIPTION => assert_eq!(payloads.len(), 1, "{topic}"),
+            // Once at the start, then again whenever the button's cap moved (at most at /tf's rate).
+            RunLogTopics::SCENE => assert!(
+                (1..=ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS)).contains(&payloads.len()),
+                "{topic}: {} messages",
+                payloads.len()
+            ),
             _ if ty != MsgType::String => assert_eq!(payloads.len(), ticks, "{topic}: one message per tick"),
             _ => {}
         }
@@ -688,6 +692,15 @@ fn a_run_log_written_in_batches_is_the_log_written_whole() {
             let state = if k % 30 < 13 { a } else { b };
             log.ticks.push(tick_at(k as f64 * 1e-3, state));
         }
+        // The button's cap goes down and comes back every tenth tick, and a part the scene
+        // does not have is skipped.
+        log.part_names = vec!["button".to_owned(), "no_such_part".to_owned()];
+        for (n, tick) in (0..ticks).step_by(10).enumerate() {
+            for part in 0..2 {
+                let offset_m = 1e-3 * (n % 4) as f64;
+                log.parts.push(skill_runtime::exec::PartSample { tick, part, offset_m });
+            }
+        }
     }
     let scene = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
     let objects = &scene.spec().objects;
@@ -698,8 +711,12 @@ fn a_run_log_written_in_batches_is_the_log_written_whole() {
         let mut writer = skillc::ros::RunLogWriter::new(&names, None, objects);
         for (step, log) in &logs {
             writer.start_log(step.map(str::to_owned));
-            for ticks in log.ticks.chunks(batch) {
-                writer.push(&log.states, ticks).expect("a batch");
+            for (chunk, ticks) in log.ticks.chunks(batch).enumerate() {
+                let range = chunk * batch..chunk * batch + ticks.len();
+                let parts: Vec<_> = log.parts.iter().filter(|p| range.contains(&p.tick)).copied().collect();
+                writer
+                    .push(&log.states, ticks, &log.part_names, &parts)
+                    .expect("a batch");
             }
         }
         let batched = writer.finish().expect("written in batches");
@@ -723,14 +740,14 @@ fn a_run_log_written_in_batches_is_the_log_written_whole() {
 
 #[test]
 fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
-    let (_, skill) = load_skill(&root().join("stdlib-skills/touch.skill"), None).expect("touch");
+    let (_, skill) = load_skill(&root().join("stdlib-skills/press.skill"), None).expect("press");
     let learned = learn_from_files(
         &skill,
-        &root().join("examples/demos/touch.csv"),
+        &root().join("examples/demos/press.csv"),
         &LearnOptions::default(),
     )
     .expect("learns");
-    let scene = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &[]).expect("scene");
+    let scene = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
     let bound = skill_runtime::exec::bind(&skill, &learned).expect("binds");
     let dir = temp_dir("live");
     for ext in ["csv", "mcap"] {
@@ -749,6 +766,7 @@ fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
             "a run of several batches: {} ticks",
             log.ticks.len()
         );
+        assert!(log.parts.len() > 100, "the cap moved: {} part samples", log.parts.len());
         live.finish(&live_path).expect("written live");
         let after_path = dir.join(format!("after.{ext}"));
         skillc::run_log::write_after(&after_path, &[(None, &log)], &scene).expect("written after");
@@ -762,4 +780,86 @@ fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
         );
         assert!(live.len() > 100_000, "{ext}: {} bytes", live.len());
     }
+}
+
+/// A press of the button scene: `/scene` is written again whenever the cap moves, whole each
+/// time (a latched topic's last message is what a late viewer draws), and the cap it draws
+/// goes down under the probe and comes back up. The second witness is the probe itself: at the
+/// cap's deepest the probe's tip sphere (`/tool_pose` its centre) stands on the cap's drawn top,
+/// and `/wrench` pushes the tool up by more than the spring's preload.
+#[test]
+fn a_pressed_buttons_cap_moves_on_scene_under_the_probe() {
+    use skillc::ros::msgs::{decode_markers, marker_type, Marker};
+    let dir = temp_dir("cap");
+    let log = dir.join("press.log.mcap");
+    let out = skillc(
+        root(),
+        &[
+            "run",
+            "stdlib-skills/press.skill",
+            "--demo",
+            "examples/demos/press.csv",
+            "--scene",
+            "examples/scenes/button.toml",
+            "-o",
+            log.to_str().expect("utf-8 path"),
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let bytes = std::fs::read(&log).expect("read bag");
+    let mut scenes: Vec<(u64, Vec<Marker>)> = Vec::new();
+    let mut poses = BTreeMap::new();
+    let mut wrenches = BTreeMap::new();
+    for message in mcap::MessageStream::new(&bytes).expect("MCAP") {
+        let message = message.expect("message");
+        match message.channel.topic.as_str() {
+            RunLogTopics::SCENE => scenes.push((message.log_time, decode_markers(&message.data).expect("MarkerArray"))),
+            RunLogTopics::TOOL_POSE => {
+                poses.insert(message.log_time, PoseStamped::decode(&message.data).expect("pose"));
+            }
+            RunLogTopics::WRENCH => {
+                wrenches.insert(message.log_time, WrenchStamped::decode(&message.data).expect("wrench"));
+            }
+            _ => {}
+        }
+    }
+    // examples/scenes/button.toml: the base box, then the button's cap (20 mm tall, its centre
+    // at z = 0.29 m at rest, 8 mm of travel), each with its label.
+    let (rest_z, half_height, travel) = (0.29, 0.01, 0.008);
+    let cap_z = |markers: &[Marker]| {
+        assert_eq!(markers.len(), 4, "the whole scene each time: {markers:?}");
+        let cap = &markers[2];
+        assert_eq!((cap.ns.as_str(), cap.shape), ("scene", marker_type::CYLINDER));
+        assert_eq!(cap.position[..2], [0.5466, 0.0]);
+        assert_eq!(markers[0].position, [0.55, 0.0, 0.2], "the base box never moves");
+        cap.position[2]
+    };
+    assert!(scenes.len() > 10, "{} /scene messages", scenes.len());
+    assert!((cap_z(&scenes[0].1) - rest_z).abs() < 1e-12, "at rest at the start");
+    let (deepest_at, deepest_z) = scenes
+        .iter()
+        .map(|(stamp, markers)| (*stamp, cap_z(markers)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("messages");
+    let depth = rest_z - deepest_z;
+    assert!(depth > 1e-3 && depth < travel + 1e-3, "the cap went {depth} m down");
+    // The tool point is the centre of the probe's 10 mm tip sphere (examples/robots/lwr4.urdf).
+    let tip = poses[&deepest_at].position[2];
+    let top = deepest_z + half_height;
+    assert!(
+        (tip - 0.01 - top).abs() < 1.5e-3,
+        "the probe's tip sphere (centre {tip} m) stands on the cap's top at {top} m"
+    );
+    let push = wrenches[&deepest_at].force[2];
+    assert!(
+        push > 2.0,
+        "the cap pushes the probe up with {push} N, more than its preload"
+    );
+    let last = cap_z(&scenes.last().expect("messages").1);
+    assert!(
+        rest_z - last < 5e-4,
+        "the cap is back up at the end: {} m in",
+        rest_z - last
+    );
+    std::fs::remove_dir_all(&dir).expect("clean up");
 }

@@ -123,6 +123,14 @@ pub trait Plant {
     fn take_contact_audit(&mut self) -> Option<ContactAudit> {
         None
     }
+
+    /// Calls `visit` with each of the scene's moving parts, by its object's name, and how far
+    /// it has moved from its rest along its own axis, m: a button's cap and how deep it is
+    /// pressed in (0 at rest). Without allocating; plants without moving parts (a real arm,
+    /// the model-based test plant, a plant across a link) call it for none.
+    fn visit_parts(&self, visit: &mut dyn FnMut(&str, f64)) {
+        let _ = visit;
+    }
 }
 
 /// A simulation's contact force checked against its geometry, tick by tick (docs/method.md §7):

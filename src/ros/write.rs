@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::io::Cursor;
 
 use skill_runtime::demo::{Demo, WrenchFrame};
-use skill_runtime::exec::{RunLog, Tick};
+use skill_runtime::exec::{PartSample, RunLog, Tick};
 
 use skill_runtime::sim::{ObjectShape, ObjectSpec};
 
@@ -52,9 +52,12 @@ impl RunLogTopics {
     pub const TF_STATIC: &'static str = "/tf_static";
     /// `std_msgs/msg/String` once, first in the file, latched: the robot's URDF.
     pub const ROBOT_DESCRIPTION: &'static str = "/robot_description";
-    /// `visualization_msgs/msg/MarkerArray` once, latched: the scene's objects as they stand at
-    /// the start (boxes as cubes, cylinders and button caps as cylinders, in frame `base`),
-    /// namespace `scene`, and their names above them, namespace `scene_labels`.
+    /// `visualization_msgs/msg/MarkerArray`, latched: the scene's objects (boxes as cubes,
+    /// cylinders and button caps as cylinders, in frame `base`), namespace `scene`, and their
+    /// names above them, namespace `scene_labels`. Written at the start with every object at
+    /// rest, and again whole whenever a moving part's sample in the log moved it (a button's
+    /// cap pressed in, every [`PART_PERIOD_TICKS`](skill_runtime::exec::PART_PERIOD_TICKS)
+    /// ticks at most).
     pub const SCENE: &'static str = "/scene";
     /// `visualization_msgs/msg/MarkerArray` every [`TF_PERIOD_TICKS`] ticks: the contact force
     /// on the tool as arrows from the tool point, [`FORCE_ARROW_M_PER_N`] long per newton
@@ -214,36 +217,17 @@ fn marker(t: Time, ns: &str, id: usize, shape: i32) -> Marker {
     }
 }
 
-/// The scene's objects as markers, each with its name above it (see [`RunLogTopics::SCENE`]).
-fn scene_markers(t: Time, objects: &BTreeMap<String, ObjectSpec>) -> Vec<Marker> {
+/// The scene's objects as markers, each with its name above it (see [`RunLogTopics::SCENE`]),
+/// each moved by its offset in `offsets_m` (by the objects' order; none given: at rest).
+fn scene_markers(t: Time, objects: &BTreeMap<String, ObjectSpec>, offsets_m: &[f64]) -> Vec<Marker> {
     let mut markers = Vec::with_capacity(2 * objects.len());
     for (index, (name, object)) in objects.iter().enumerate() {
-        let pose = object.pose();
-        let q = pose.rotation.quaternion();
-        let (shape, scale, color, half_height) = match object.shape() {
-            ObjectShape::Box { size } => (marker_type::CUBE, size, [0.62, 0.62, 0.66, 1.0], size[2] / 2.0),
-            ObjectShape::Cylinder { radius, length } => (
-                marker_type::CYLINDER,
-                [2.0 * radius, 2.0 * radius, length],
-                [0.55, 0.62, 0.75, 1.0],
-                length / 2.0,
-            ),
-            ObjectShape::Button { radius, height, .. } => (
-                marker_type::CYLINDER,
-                [2.0 * radius, 2.0 * radius, height],
-                [0.85, 0.22, 0.2, 1.0],
-                height / 2.0,
-            ),
-        };
-        let mut body = marker(t, "scene", index, shape);
-        body.position = [pose.translation.x, pose.translation.y, pose.translation.z];
-        body.orientation_xyzw = [q.i, q.j, q.k, q.w];
-        body.scale = scale;
-        body.color_rgba = color;
+        let offset_m = offsets_m.get(index).copied().unwrap_or(0.0);
+        let (body, half_height) = object_marker(t, index, object, offset_m);
         markers.push(body);
         // The label stands 2 cm above the object's top along the world's z (a tilted object's
         // highest point is not sought: the label only names it).
-        let top = pose * nalgebra::Point3::new(0.0, 0.0, half_height);
+        let top = object.pose() * nalgebra::Point3::new(0.0, 0.0, half_height);
         let mut label = marker(t, "scene_labels", index, marker_type::TEXT_VIEW_FACING);
         label.position = [top.x, top.y, top.z + 0.02];
         label.scale = [0.0, 0.0, 0.02];
@@ -252,6 +236,34 @@ fn scene_markers(t: Time, objects: &BTreeMap<String, ObjectSpec>) -> Vec<Marker>
         markers.push(label);
     }
     markers
+}
+
+/// Object `index`'s marker in namespace `scene`, moved `offset_m` down its own z axis from
+/// where it stands at rest (a button's cap pressed in), and its half height.
+fn object_marker(t: Time, index: usize, object: &ObjectSpec, offset_m: f64) -> (Marker, f64) {
+    let pose = object.pose() * nalgebra::Translation3::new(0.0, 0.0, -offset_m);
+    let q = pose.rotation.quaternion();
+    let (shape, scale, color, half_height) = match object.shape() {
+        ObjectShape::Box { size } => (marker_type::CUBE, size, [0.62, 0.62, 0.66, 1.0], size[2] / 2.0),
+        ObjectShape::Cylinder { radius, length } => (
+            marker_type::CYLINDER,
+            [2.0 * radius, 2.0 * radius, length],
+            [0.55, 0.62, 0.75, 1.0],
+            length / 2.0,
+        ),
+        ObjectShape::Button { radius, height, .. } => (
+            marker_type::CYLINDER,
+            [2.0 * radius, 2.0 * radius, height],
+            [0.85, 0.22, 0.2, 1.0],
+            height / 2.0,
+        ),
+    };
+    let mut body = marker(t, "scene", index, shape);
+    body.position = [pose.translation.x, pose.translation.y, pose.translation.z];
+    body.orientation_xyzw = [q.i, q.j, q.k, q.w];
+    body.scale = scale;
+    body.color_rgba = color;
+    (body, half_height)
 }
 
 /// The measured and desired force on the tool as arrows from the tool point (see
@@ -325,7 +337,7 @@ pub fn write_run_log(
     let mut writer = RunLogWriter::new(joint_names, description, objects);
     for (step, log) in logs {
         writer.start_log(step.map(str::to_owned));
-        writer.push(&log.states, &log.ticks)?;
+        writer.push(&log.states, &log.ticks, &log.part_names, &log.parts)?;
     }
     writer.finish()
 }
@@ -337,6 +349,8 @@ pub struct RunLogWriter {
     /// The robot and its URDF, for `/robot_description` and `/tf`.
     robot: Option<(skill_runtime::robot::Robot, String)>,
     objects: BTreeMap<String, ObjectSpec>,
+    /// How far each object (by the map's order) has moved from its rest, as last drawn, m.
+    offsets_m: Vec<f64>,
     /// The joint names, `joint_N` added for joints past the robot's.
     names: Vec<String>,
     /// The bag and, with a robot, its model's data and the links joints move; from the first tick.
@@ -344,7 +358,9 @@ pub struct RunLogWriter {
     /// The task step of the log being written, and whether its first tick is still to come.
     step: Option<String>,
     log_started: bool,
+    /// Ticks written of the whole bag, and of the current log.
     tick_index: usize,
+    log_ticks: usize,
     offset_s: f64,
     last_s: f64,
     last_state: Option<String>,
@@ -363,11 +379,13 @@ impl RunLogWriter {
         RunLogWriter {
             robot: description.map(|d| (d.robot.clone(), d.urdf.to_owned())),
             objects: objects.clone(),
+            offsets_m: vec![0.0; objects.len()],
             names: joint_names.to_vec(),
             bag: None,
             step: None,
             log_started: false,
             tick_index: 0,
+            log_ticks: 0,
             offset_s: 0.0,
             last_s: f64::NEG_INFINITY,
             last_state: None,
@@ -378,6 +396,7 @@ impl RunLogWriter {
     pub fn start_log(&mut self, step: Option<String>) {
         self.step = step;
         self.log_started = true;
+        self.log_ticks = 0;
     }
 
     /// The bag with its latched topics, begun at `first_t`.
@@ -403,13 +422,21 @@ impl RunLogWriter {
         bag.put(
             RunLogTopics::SCENE,
             first_t,
-            &encode_markers(&scene_markers(first_t, &self.objects)),
+            &encode_markers(&scene_markers(first_t, &self.objects, &[])),
         )?;
         Ok((bag, kinematics))
     }
 
-    /// Writes `ticks`, the next ticks of the current log, whose state names are `states`.
-    pub fn push(&mut self, states: &[String], ticks: &[Tick]) -> Result<(), BagError> {
+    /// Writes `ticks`, the next ticks of the current log, whose state names are `states`, and
+    /// the log's part samples `parts` of those ticks (their ticks count the log's, their parts
+    /// index `part_names`): each moves its object on `/scene`.
+    pub fn push(
+        &mut self,
+        states: &[String],
+        ticks: &[Tick],
+        part_names: &[String],
+        parts: &[PartSample],
+    ) -> Result<(), BagError> {
         let Some(first) = ticks.first() else { return Ok(()) };
         if self.bag.is_none() {
             self.bag = Some(self.begin(Time::from_seconds(first.t_s))?);
@@ -420,6 +447,7 @@ impl RunLogWriter {
         let Some((bag, kinematics)) = self.bag.as_mut() else {
             return Ok(());
         };
+        let mut parts = parts.iter().peekable();
         for tick in ticks {
             let t_s = tick.t_s + self.offset_s;
             self.last_s = t_s;
@@ -466,7 +494,25 @@ impl RunLogWriter {
                     bag.put(RunLogTopics::TF, t, &super::msgs::encode_tf(&moving))?;
                 }
             }
+            // The whole scene again when a part moved: a latched topic's last message is
+            // what a viewer that joins late draws.
+            let mut moved = false;
+            while let Some(sample) = parts.next_if(|sample| sample.tick <= self.log_ticks) {
+                let name = part_names.get(sample.part as usize);
+                if let Some(index) = name.and_then(|name| self.objects.keys().position(|key| key == name)) {
+                    self.offsets_m[index] = sample.offset_m;
+                    moved = true;
+                }
+            }
+            if moved {
+                bag.put(
+                    RunLogTopics::SCENE,
+                    t,
+                    &encode_markers(&scene_markers(t, &self.objects, &self.offsets_m)),
+                )?;
+            }
             self.tick_index += 1;
+            self.log_ticks += 1;
             let state = states.get(tick.state as usize).map_or("?", String::as_str);
             let state = match &self.step {
                 Some(step) => format!("{step}/{state}"),

@@ -1,5 +1,7 @@
 //! The per-tick log of a run and its CSV export.
 
+use crate::plant::Plant;
+
 /// One control tick.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tick {
@@ -120,41 +122,77 @@ impl<const N: usize> std::fmt::Debug for JointValues<N> {
     }
 }
 
-/// Every tick of a run, with the names of the states ticks refer to.
+/// Every tick of a run, with the names of the states ticks refer to, and where the scene's
+/// moving parts went.
 #[derive(Debug, Default)]
 pub struct RunLog {
     /// State names (`prepose`, `replay:<motion>` and the skill's states).
     pub states: Vec<String>,
     /// The ticks in time order.
     pub ticks: Vec<Tick>,
+    /// The scene's moving parts (a button's cap) by their object's name, as the plant named
+    /// them ([`Plant::visit_parts`]).
+    pub part_names: Vec<String>,
+    /// Where the parts stood, in tick order: every [`PART_PERIOD_TICKS`] ticks, each part
+    /// whose offset moved [`PART_MOVE_M`] or more since its last sample (and its first).
+    pub parts: Vec<PartSample>,
+    /// Each part's offset at its last sample.
+    last_offsets: Vec<f64>,
     /// Where the ticks are also sent as they are logged.
     tap: Option<Tapped>,
 }
 
-/// A log's place on a tap: the tap, the log's number on it and how many ticks have been sent.
+/// Where one of the scene's moving parts stood at a tick of its log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PartSample {
+    /// The tick: an index into the log's [`RunLog::ticks`].
+    pub tick: usize,
+    /// The part: an index into [`RunLog::part_names`].
+    pub part: u32,
+    /// How far the part has moved from its rest along its own axis, m (a button's depth).
+    pub offset_m: f64,
+}
+
+/// The scene's moving parts are sampled every this many ticks (10 ms at 1 kHz, the rate of a
+/// run log's `/tf`).
+pub const PART_PERIOD_TICKS: usize = 10;
+
+/// A part's sample is logged when it has moved this far since its last one, m.
+pub const PART_MOVE_M: f64 = 1e-5;
+
+/// A log's place on a tap: the tap, the log's number on it and how many ticks and part
+/// samples have been sent.
 #[derive(Debug)]
 struct Tapped {
     tap: LogTap,
     log: usize,
     sent: usize,
+    sent_parts: usize,
 }
 
-/// A copy holds the states and ticks, not the tap: only the log being recorded sends them on.
+/// A copy holds the states, ticks and parts, not the tap: only the log being recorded sends
+/// them on.
 impl Clone for RunLog {
     fn clone(&self) -> Self {
         RunLog {
             states: self.states.clone(),
             ticks: self.ticks.clone(),
+            part_names: self.part_names.clone(),
+            parts: self.parts.clone(),
+            last_offsets: self.last_offsets.clone(),
             tap: None,
         }
     }
 }
 
-/// Two logs are equal when their states and ticks are: a tap is where they went, not what
-/// they hold.
+/// Two logs are equal when their states, ticks and parts are: a tap is where they went, not
+/// what they hold.
 impl PartialEq for RunLog {
     fn eq(&self, other: &Self) -> bool {
-        self.states == other.states && self.ticks == other.ticks
+        self.states == other.states
+            && self.ticks == other.ticks
+            && self.part_names == other.part_names
+            && self.parts == other.parts
     }
 }
 
@@ -203,6 +241,11 @@ pub enum TapEvent {
         states: Vec<String>,
         /// The ticks logged since the log's previous batch.
         ticks: Vec<Tick>,
+        /// The log's part names as they stand (a later batch may have more).
+        part_names: Vec<String>,
+        /// The part samples logged since the previous batch (their ticks index the whole
+        /// log's ticks, not this batch's).
+        parts: Vec<PartSample>,
     },
     /// Nothing more comes: sent by whoever made the tap once its runs are over.
     End,
@@ -238,6 +281,7 @@ impl RunLog {
                 tap: tap.clone(),
                 log,
                 sent: 0,
+                sent_parts: 0,
             }
         });
         RunLog {
@@ -246,7 +290,43 @@ impl RunLog {
         }
     }
 
-    /// Sends the ticks not yet sent when a batch is full (every tick is logged through here).
+    /// Logs `tick`, samples the plant's moving parts on every [`PART_PERIOD_TICKS`]-th tick,
+    /// and sends a full batch on (every tick of a run is logged through here).
+    pub(crate) fn record(&mut self, tick: Tick, plant: &dyn Plant) {
+        self.ticks.push(tick);
+        let index = self.ticks.len() - 1;
+        if index.is_multiple_of(PART_PERIOD_TICKS) {
+            let RunLog {
+                part_names,
+                parts,
+                last_offsets,
+                ..
+            } = self;
+            plant.visit_parts(&mut |name, offset_m| {
+                let part = match part_names.iter().position(|known| known == name) {
+                    Some(part) => part,
+                    None => {
+                        part_names.push(name.to_owned());
+                        last_offsets.push(f64::NAN);
+                        part_names.len() - 1
+                    }
+                };
+                // A new part's last offset is NaN: its first sample is always logged.
+                let last = last_offsets[part];
+                if last.is_nan() || (offset_m - last).abs() >= PART_MOVE_M {
+                    last_offsets[part] = offset_m;
+                    parts.push(PartSample {
+                        tick: index,
+                        part: part as u32,
+                        offset_m,
+                    });
+                }
+            });
+        }
+        self.offer();
+    }
+
+    /// Sends the ticks not yet sent when a batch is full.
     pub(crate) fn offer(&mut self) {
         if let Some(tapped) = &self.tap {
             if self.ticks.len() - tapped.sent >= TAP_BATCH_TICKS {
@@ -272,8 +352,11 @@ impl RunLog {
             log: tapped.log,
             states: self.states.clone(),
             ticks: self.ticks[tapped.sent..].to_vec(),
+            part_names: self.part_names.clone(),
+            parts: self.parts[tapped.sent_parts..].to_vec(),
         };
         tapped.sent = self.ticks.len();
+        tapped.sent_parts = self.parts.len();
         // A writer that has gone away takes nothing more; the log itself keeps every tick.
         let _ = tapped.tap.sender.send(batch);
     }
@@ -539,7 +622,7 @@ mod tests {
                     batches.push(0);
                     rebuilt.start_log(step.clone());
                 }
-                TapEvent::Ticks { log, states, ticks } => {
+                TapEvent::Ticks { log, states, ticks, .. } => {
                     assert_eq!(*log + 1, batches.len(), "a log's ticks come after it started");
                     batches[*log] += 1;
                     rebuilt.push(states, ticks);

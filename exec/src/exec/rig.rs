@@ -122,15 +122,8 @@ impl<'p> Rig<'p> {
         let torques = self.controller.torques(&self.obs, cmd, dt);
         self.torques.copy_from_slice(torques);
         if let Some(log) = log.as_deref_mut() {
-            log.ticks.push(tick_record(
-                self.t_s,
-                state,
-                cmd,
-                &self.controller,
-                &self.torques,
-                &self.obs,
-            ));
-            log.offer();
+            let tick = tick_record(self.t_s, state, cmd, &self.controller, &self.torques, &self.obs);
+            log.record(tick, &*self.plant);
         }
         let checked = self
             .supervisor
@@ -180,15 +173,8 @@ impl<'p> Rig<'p> {
                     Isometry3::identity()
                 };
                 let hold = Command::hold(pose, [0.0; 6]);
-                log.ticks.push(tick_record(
-                    self.t_s,
-                    state,
-                    &hold,
-                    &self.controller,
-                    &self.torques,
-                    &self.obs,
-                ));
-                log.offer();
+                let tick = tick_record(self.t_s, state, &hold, &self.controller, &self.torques, &self.obs);
+                log.record(tick, &*self.plant);
             }
             self.apply_and_step("reflex", dt)?;
         }

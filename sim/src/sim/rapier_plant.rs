@@ -627,7 +627,11 @@ impl RapierPlant {
 
     /// How far button `name` is pressed in, m (0 at rest, its travel at the stop); `None` if no such button.
     pub fn button_depth(&self, name: &str) -> Option<f64> {
-        let button = self.buttons.iter().find(|button| button.name == name)?;
+        self.depth_of(self.buttons.iter().find(|button| button.name == name)?)
+    }
+
+    /// How far `button`'s cap is pressed in, m.
+    fn depth_of(&self, button: &Button) -> Option<f64> {
         let (multibody, link_id) = self.multibody_joints.get(button.joint)?;
         let link = multibody.link(link_id)?;
         Some(-f64::from(link.joint.coords()[0]))
@@ -922,6 +926,14 @@ impl Plant for RapierPlant {
 
     fn take_contact_audit(&mut self) -> Option<ContactAudit> {
         self.witness.as_mut().map(Witness::take)
+    }
+
+    fn visit_parts(&self, visit: &mut dyn FnMut(&str, f64)) {
+        for button in &self.buttons {
+            if let Some(depth) = self.depth_of(button) {
+                visit(&button.name, depth);
+            }
+        }
     }
 }
 

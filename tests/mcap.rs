@@ -509,6 +509,27 @@ fn malformed_bags_are_refused_naming_file_topic_and_message() {
     std::fs::remove_dir_all(&dir).expect("clean up");
 }
 
+/// The MCAP log of `skillc run` of standard skill `skill`, learned from its shipped
+/// demonstration, in `examples/scenes/<scene>.toml`, written into `dir`; the run must succeed.
+fn run_logged_as_mcap(dir: &Path, skill: &str, scene: &str) -> Vec<u8> {
+    let log = dir.join(format!("{skill}.log.mcap"));
+    let out = skillc(
+        root(),
+        &[
+            "run",
+            &format!("stdlib-skills/{skill}.skill"),
+            "--demo",
+            &format!("examples/demos/{skill}.csv"),
+            "--scene",
+            &format!("examples/scenes/{scene}.toml"),
+            "-o",
+            log.to_str().expect("utf-8 path"),
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::read(&log).expect("read bag")
+}
+
 /// `/tf` read back with the `mcap` crate's reader (not skillc's bag reader): its tool link's
 /// transform at each stamp equals `/tool_pose` at that stamp within 1e-9; `/robot_description`
 /// is the file's first message and carries the scene's URDF; `/scene` draws the table where the
@@ -520,22 +541,7 @@ fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
     use skillc::ros::msgs::{decode_markers, decode_tf, marker_action, marker_type, Marker};
     use skillc::ros::{FORCE_ARROW_MIN_N, FORCE_ARROW_M_PER_N};
     let dir = temp_dir("tf");
-    let log = dir.join("touch.log.mcap");
-    let out = skillc(
-        root(),
-        &[
-            "run",
-            "stdlib-skills/touch.skill",
-            "--demo",
-            "examples/demos/touch.csv",
-            "--scene",
-            "examples/scenes/table.toml",
-            "-o",
-            log.to_str().expect("utf-8 path"),
-        ],
-    );
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
-    let bytes = std::fs::read(&log).expect("read bag");
+    let bytes = run_logged_as_mcap(&dir, "touch", "table");
     let mut first_topic = None;
     let mut poses = BTreeMap::new();
     let mut transforms = Vec::new();
@@ -791,22 +797,7 @@ fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
 fn a_pressed_buttons_cap_moves_on_scene_under_the_probe() {
     use skillc::ros::msgs::{decode_markers, marker_type, Marker};
     let dir = temp_dir("cap");
-    let log = dir.join("press.log.mcap");
-    let out = skillc(
-        root(),
-        &[
-            "run",
-            "stdlib-skills/press.skill",
-            "--demo",
-            "examples/demos/press.csv",
-            "--scene",
-            "examples/scenes/button.toml",
-            "-o",
-            log.to_str().expect("utf-8 path"),
-        ],
-    );
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
-    let bytes = std::fs::read(&log).expect("read bag");
+    let bytes = run_logged_as_mcap(&dir, "press", "button");
     let mut scenes: Vec<(u64, Vec<Marker>)> = Vec::new();
     let mut poses = BTreeMap::new();
     let mut wrenches = BTreeMap::new();

@@ -218,12 +218,34 @@ fn marker(t: Time, ns: &str, id: usize, shape: i32) -> Marker {
 }
 
 /// The scene's objects as markers, each with its name above it (see [`RunLogTopics::SCENE`]),
-/// each moved by its offset in `offsets_m` (by the objects' order; none given: at rest).
+/// each moved by its offset in `offsets_m` (by the objects' order; none given: at rest) down its
+/// own z axis: a button's cap pressed in. The labels stay where the objects stand at rest.
 fn scene_markers(t: Time, objects: &BTreeMap<String, ObjectSpec>, offsets_m: &[f64]) -> Vec<Marker> {
     let mut markers = Vec::with_capacity(2 * objects.len());
     for (index, (name, object)) in objects.iter().enumerate() {
         let offset_m = offsets_m.get(index).copied().unwrap_or(0.0);
-        let (body, half_height) = object_marker(t, index, object, offset_m);
+        let pose = object.pose() * nalgebra::Translation3::new(0.0, 0.0, -offset_m);
+        let q = pose.rotation.quaternion();
+        let (shape, scale, color, half_height) = match object.shape() {
+            ObjectShape::Box { size } => (marker_type::CUBE, size, [0.62, 0.62, 0.66, 1.0], size[2] / 2.0),
+            ObjectShape::Cylinder { radius, length } => (
+                marker_type::CYLINDER,
+                [2.0 * radius, 2.0 * radius, length],
+                [0.55, 0.62, 0.75, 1.0],
+                length / 2.0,
+            ),
+            ObjectShape::Button { radius, height, .. } => (
+                marker_type::CYLINDER,
+                [2.0 * radius, 2.0 * radius, height],
+                [0.85, 0.22, 0.2, 1.0],
+                height / 2.0,
+            ),
+        };
+        let mut body = marker(t, "scene", index, shape);
+        body.position = [pose.translation.x, pose.translation.y, pose.translation.z];
+        body.orientation_xyzw = [q.i, q.j, q.k, q.w];
+        body.scale = scale;
+        body.color_rgba = color;
         markers.push(body);
         // The label stands 2 cm above the object's top along the world's z (a tilted object's
         // highest point is not sought: the label only names it).
@@ -236,34 +258,6 @@ fn scene_markers(t: Time, objects: &BTreeMap<String, ObjectSpec>, offsets_m: &[f
         markers.push(label);
     }
     markers
-}
-
-/// Object `index`'s marker in namespace `scene`, moved `offset_m` down its own z axis from
-/// where it stands at rest (a button's cap pressed in), and its half height.
-fn object_marker(t: Time, index: usize, object: &ObjectSpec, offset_m: f64) -> (Marker, f64) {
-    let pose = object.pose() * nalgebra::Translation3::new(0.0, 0.0, -offset_m);
-    let q = pose.rotation.quaternion();
-    let (shape, scale, color, half_height) = match object.shape() {
-        ObjectShape::Box { size } => (marker_type::CUBE, size, [0.62, 0.62, 0.66, 1.0], size[2] / 2.0),
-        ObjectShape::Cylinder { radius, length } => (
-            marker_type::CYLINDER,
-            [2.0 * radius, 2.0 * radius, length],
-            [0.55, 0.62, 0.75, 1.0],
-            length / 2.0,
-        ),
-        ObjectShape::Button { radius, height, .. } => (
-            marker_type::CYLINDER,
-            [2.0 * radius, 2.0 * radius, height],
-            [0.85, 0.22, 0.2, 1.0],
-            height / 2.0,
-        ),
-    };
-    let mut body = marker(t, "scene", index, shape);
-    body.position = [pose.translation.x, pose.translation.y, pose.translation.z];
-    body.orientation_xyzw = [q.i, q.j, q.k, q.w];
-    body.scale = scale;
-    body.color_rgba = color;
-    (body, half_height)
 }
 
 /// The measured and desired force on the tool as arrows from the tool point (see

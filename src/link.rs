@@ -89,6 +89,8 @@ mod enabled {
         let mut plant = RapierPlant::from_scene(&scene).map_err(|err| Failure::Input(error_chain(&err)))?;
         let robot = plant.robot().clone();
         let stop = crate::atomic::stop_on_signal();
+        // Before the session: Zenoh's threads, which carry the loop's messages, inherit it.
+        let scheduling = node::scheduling_words(&node::realtime_scheduling());
         let session = node::open(&args.listen, Role::Listen).map_err(|err| Failure::Usage(err.to_string()))?;
         let options = ServeOptions {
             domain: args.domain,
@@ -101,7 +103,7 @@ mod enabled {
             // A closed standard output does not stop the plant: it serves on and says nothing.
             let _ = crate::out::print_or_code(&format!(
                 "plant: serving `{}` ({}, {} joints) at {} on ROS domain {}: /joint_states, /wrench and \
-                 /skillc/state out, /joint_effort_commands in; Ctrl-C stops\n",
+                 /skillc/state out, /joint_effort_commands in; Ctrl-C stops\n  scheduling: {scheduling}\n",
                 scene.file(),
                 robot.name(),
                 robot.dof(),
@@ -126,7 +128,12 @@ mod enabled {
             summary.malformed,
             summary.damped_stops
         );
-        if let Some(audit) = plant.take_contact_audit() {
+        // What the runs took from the witness, and the steps since the last one asked.
+        let mut contact = summary.contact;
+        if let Some(rest) = plant.take_contact_audit() {
+            contact.get_or_insert_with(Default::default).merge(rest);
+        }
+        if let Some(audit) = contact {
             let _ = writeln!(text, "  {}", audit.summary());
         }
         Ok(text)
@@ -157,9 +164,12 @@ mod enabled {
                 LinkMode::Realtime => REALTIME_SILENCE,
             },
         };
+        // In realtime, before the session, so that Zenoh's threads inherit it; lockstep polls
+        // for every state and needs no priority over the machine's other work.
+        let scheduling = (mode == LinkMode::Realtime).then(|| node::scheduling_words(&node::realtime_scheduling()));
         let mut plant = RemotePlant::connect(options, robot.dof()).map_err(|err| Failure::Input(error_chain(&err)))?;
         let result = run(robot, &mut plant).map_err(|err| Failure::Input(error_chain(&err)))?;
-        let line = (mode == LinkMode::Realtime).then(|| plant.stats().line());
+        let line = scheduling.map(|scheduling| format!("{}\n  scheduling: {scheduling}", plant.stats().line()));
         Ok((result, line))
     }
 }

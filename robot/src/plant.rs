@@ -119,7 +119,7 @@ pub trait Plant {
     /// What the plant's contact witness found since the last call (and starts it afresh): a
     /// simulation checks every step's contact force on the tool against the analytic distance
     /// between the tool and the scene's shapes. `None` for plants without one (a real arm, the
-    /// model-based test plant).
+    /// model-based test plant); a plant across a link asks the simulation on its other side.
     fn take_contact_audit(&mut self) -> Option<ContactAudit> {
         None
     }
@@ -127,7 +127,8 @@ pub trait Plant {
     /// Calls `visit` with each of the scene's moving parts, by its object's name, and how far
     /// it has moved from its rest along its own axis, m: a button's cap and how deep it is
     /// pressed in (0 at rest). Without allocating; plants without moving parts (a real arm,
-    /// the model-based test plant, a plant across a link) call it for none.
+    /// the model-based test plant) call it for none, and a plant across a link for those its
+    /// last state named.
     fn visit_parts(&self, visit: &mut dyn FnMut(&str, f64)) {
         let _ = visit;
     }

@@ -13,8 +13,11 @@
 //! | `/joint_effort_commands` | `std_msgs/msg/Float64MultiArray` | controller → plant: joint torques, URDF order |
 //! | `/skillc/state` | `std_msgs/msg/Float64MultiArray` | plant → run: the whole observation with its tick ([`wire::State`]) |
 //!
-//! and one query, `<domain>/skillc/plant/start`, with which a run starts its session: it says
-//! `lockstep` or `realtime` and the plant answers with its state.
+//! and two queries: `<domain>/skillc/plant/start`, with which a run starts its session (it says
+//! `lockstep` or `realtime` and the plant answers with its state), and
+//! `<domain>/skillc/plant/witness`, which the plant answers with what its contact witness found
+//! since the last time it was asked (a [`ContactAudit`](skill_robot::plant::ContactAudit) as JSON,
+//! `null` for a plant without one).
 #![warn(missing_docs)]
 
 pub mod node;
@@ -37,6 +40,11 @@ pub const STATE: &str = "/skillc/state";
 /// The key expression of the start query on `domain`.
 pub fn start_key(domain: u32) -> String {
     format!("{domain}/skillc/plant/start")
+}
+
+/// The key expression of the witness query on `domain`.
+pub fn witness_key(domain: u32) -> String {
+    format!("{domain}/skillc/plant/witness")
 }
 
 /// Why the link between the plant and the run failed.

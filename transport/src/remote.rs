@@ -8,17 +8,19 @@
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use skill_robot::plant::{Observation, Plant, PlantError};
+use skill_robot::plant::{ContactAudit, Observation, Plant, PlantError};
 use skill_ros::msgs::{self, Float64MultiArray, MsgType};
 use zenoh::pubsub::Subscriber;
 use zenoh::{Session, Wait};
 
 use crate::node::{self, Node, Role, RosPublisher};
 use crate::wire::{self, State};
-use crate::{start_key, TransportError, COMMANDS, STATE};
+use crate::{start_key, witness_key, TransportError, COMMANDS, STATE};
 
 /// In realtime, how long before the plant's next state is due the run polls for it.
 const SPIN: Duration = Duration::from_micros(300);
+/// How long the run waits for the plant to answer the witness query.
+const WITNESS_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// How the run and the plant keep time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -115,7 +117,7 @@ pub struct RemotePlant {
     _subscription: Subscriber<()>,
     commands: RosPublisher,
     _node: Node,
-    _session: Session,
+    session: Session,
     states: mpsc::Receiver<Vec<u8>>,
     options: RemoteOptions,
     dof: usize,
@@ -155,7 +157,7 @@ impl RemotePlant {
             _subscription: subscription,
             commands,
             _node: ros,
-            _session: session,
+            session,
             states,
             dof,
             torques: vec![0.0; dof],
@@ -289,6 +291,27 @@ impl Plant for RemotePlant {
     fn hold_damped_stop(&mut self) -> bool {
         self.stopping = true;
         true
+    }
+
+    /// Asks the plant's own witness (the witness query): `None` when the plant has none, or does
+    /// not answer within [`WITNESS_TIMEOUT`] (a plant of an older skillc), so the run reports no
+    /// witness rather than a wrong one.
+    fn take_contact_audit(&mut self) -> Option<ContactAudit> {
+        let replies = self
+            .session
+            .get(witness_key(self.options.domain))
+            .timeout(WITNESS_TIMEOUT)
+            .wait()
+            .ok()?;
+        let sample = replies.recv().ok()?.into_result().ok()?;
+        let json = msgs::decode_string(&sample.payload().to_bytes()).ok()?;
+        serde_json::from_str::<Option<ContactAudit>>(&json).ok()?
+    }
+
+    fn visit_parts(&self, visit: &mut dyn FnMut(&str, f64)) {
+        for (name, offset) in &self.current.parts {
+            visit(name, *offset);
+        }
     }
 
     fn step(&mut self, dt: f64) -> Result<(), PlantError> {

@@ -14,12 +14,16 @@
 //!
 //! Foreign ROS 2 controllers drive the plant in lockstep (its default before any session): every
 //! command they publish steps it once.
+//!
+//! A second query, the witness ([`crate::witness_key`]), hands the run what the plant's contact
+//! witness found since the run last asked, as JSON; the plant keeps the sum of all it handed out
+//! for its own summary.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use skill_robot::plant::{Observation, Plant};
+use skill_robot::plant::{ContactAudit, Observation, Plant};
 use skill_robot::robot::Robot;
 use skill_ros::msgs::{self, Float64MultiArray, Header, JointState, MsgType, Time, WrenchStamped};
 use zenoh::query::Query;
@@ -27,7 +31,7 @@ use zenoh::{Session, Wait};
 
 use crate::node::{self, Node, RosPublisher};
 use crate::wire::{self, State};
-use crate::{start_key, TransportError, COMMANDS, JOINT_STATES, STATE, WRENCH};
+use crate::{start_key, witness_key, TransportError, COMMANDS, JOINT_STATES, STATE, WRENCH};
 
 /// How often a plant that is not stepping repeats its state.
 pub const HEARTBEAT: Duration = Duration::from_millis(100);
@@ -66,6 +70,9 @@ pub struct ServeSummary {
     pub malformed: u64,
     /// Times the damped stop took over from a silent controller.
     pub damped_stops: u64,
+    /// What the contact witness found over the steps it handed to runs (`None` for a plant without
+    /// one, or before any run asked); the steps since the last question are the plant's to take.
+    pub contact: Option<ContactAudit>,
 }
 
 /// How a session runs.
@@ -84,6 +91,7 @@ enum Event {
     },
     Malformed,
     Start(Query),
+    Witness(Query),
 }
 
 struct Outlets {
@@ -159,17 +167,22 @@ pub fn serve(
         };
         let _ = commands_tx.send(event);
     })?;
-    let start = start_key(options.domain);
-    let _queryable = session
-        .declare_queryable(start.clone())
-        .callback(move |query| {
-            let _ = tx.send(Event::Start(query));
-        })
-        .wait()
-        .map_err(|err| TransportError::Zenoh {
-            what: format!("declaring the queryable `{start}`"),
-            reason: err.to_string(),
-        })?;
+    let queryable = |key: String, event: fn(Query) -> Event| {
+        let tx = tx.clone();
+        session
+            .declare_queryable(key.clone())
+            .callback(move |query| {
+                let _ = tx.send(event(query));
+            })
+            .wait()
+            .map_err(|err| TransportError::Zenoh {
+                what: format!("declaring the queryable `{key}`"),
+                reason: err.to_string(),
+            })
+    };
+    let _start = queryable(start_key(options.domain), Event::Start)?;
+    let _witness = queryable(witness_key(options.domain), Event::Witness)?;
+    drop(tx);
 
     let mut server = Server {
         plant,
@@ -211,15 +224,24 @@ struct Server<'a> {
 }
 
 impl Server<'_> {
-    fn publish(&mut self, outlets: &Outlets, late: bool, period_us: f64) -> Result<(), TransportError> {
+    /// The state to publish now.
+    fn state(&mut self, round_trip_us: f64, late: bool, period_us: f64) -> State {
         self.plant.observe_into(&mut self.obs);
-        let state = State {
+        let mut parts = Vec::new();
+        self.plant
+            .visit_parts(&mut |name, offset| parts.push((name.to_owned(), offset)));
+        State {
             tick: self.tick,
             obs: self.obs.clone(),
-            round_trip_us: self.round_trip_us,
+            round_trip_us,
             late,
             period_us,
-        };
+            parts,
+        }
+    }
+
+    fn publish(&mut self, outlets: &Outlets, late: bool, period_us: f64) -> Result<(), TransportError> {
+        let state = self.state(self.round_trip_us, late, period_us);
         outlets.publish(&state, &self.torques)?;
         self.published_at = Instant::now();
         self.round_trip_us = f64::NAN;
@@ -254,18 +276,25 @@ impl Server<'_> {
                 return None;
             }
         };
-        self.plant.observe_into(&mut self.obs);
-        let state = State {
-            tick: self.tick,
-            obs: self.obs.clone(),
-            round_trip_us: f64::NAN,
-            late: false,
-            period_us: f64::NAN,
-        };
+        let state = self.state(f64::NAN, false, f64::NAN);
         let _ = query.reply(query.key_expr().clone(), state.encode().encode()).wait();
         self.published_at = Instant::now();
         self.summary.sessions += 1;
         Some(pace)
+    }
+
+    /// Answers a witness query with what the contact witness found since the last one, and adds
+    /// it to the plant's own sum.
+    fn witness(&mut self, query: &Query) {
+        let audit = self.plant.take_contact_audit();
+        if let Some(audit) = &audit {
+            self.summary
+                .contact
+                .get_or_insert_with(ContactAudit::default)
+                .merge(audit.clone());
+        }
+        let json = serde_json::to_string(&audit).unwrap_or_else(|_| "null".to_owned());
+        let _ = query.reply(query.key_expr().clone(), msgs::encode_string(&json)).wait();
     }
 
     fn lockstep(
@@ -294,6 +323,7 @@ impl Server<'_> {
                         return Ok(Pace::Realtime);
                     }
                 }
+                Ok(Event::Witness(query)) => self.witness(&query),
                 Err(mpsc::RecvTimeoutError::Timeout) => self.publish(outlets, false, f64::NAN)?,
                 Err(mpsc::RecvTimeoutError::Disconnected) => break,
             }
@@ -345,6 +375,7 @@ impl Server<'_> {
                         return Ok(Pace::Lockstep);
                     }
                 }
+                Ok(Event::Witness(query)) => self.witness(&query),
                 Err(mpsc::RecvTimeoutError::Timeout) => self.publish(outlets, false, f64::NAN)?,
                 Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Pace::Realtime),
             }
@@ -384,6 +415,7 @@ impl Server<'_> {
                         Some(Pace::Realtime) => return Ok(Pace::Realtime),
                         None => {}
                     },
+                    Ok(Event::Witness(query)) => self.witness(&query),
                     Err(mpsc::RecvTimeoutError::Timeout) => break,
                     Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Pace::Realtime),
                 }

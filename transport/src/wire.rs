@@ -8,8 +8,11 @@
 //! `arm_contact_link` (−1 for none), `round_trip_us` (publish of the previous state to the arrival
 //! of the command that answered it, NaN when none did), `late` (1 when the plant held the last
 //! command because the one for this tick had not come) and `period_us` (the plant's real time since
-//! its previous tick, NaN in lockstep). A command is one block `effort` of the joint torques; which
-//! state it answers is its attachment's sequence number (the state's tick + 1).
+//! its previous tick, NaN in lockstep), then one block `part:NAME` of length 1 for each of the
+//! scene's moving parts: how far it has moved from its rest, m (a button's cap, how deep it is
+//! pressed; [`Plant::visit_parts`](skill_robot::plant::Plant::visit_parts)). A command is one block
+//! `effort` of the joint torques; which state it answers is its attachment's sequence number (the
+//! state's tick + 1).
 
 use skill_robot::plant::Observation;
 use skill_ros::msgs::{Float64MultiArray, MultiArrayDimension};
@@ -30,6 +33,9 @@ fn state_blocks(dof: usize) -> [(&'static str, usize); 11] {
         ("period_us", 1),
     ]
 }
+
+/// What a moving part's block label starts with; the part's name follows.
+pub const PART_PREFIX: &str = "part:";
 
 /// The label of a command's one block.
 pub const COMMAND_BLOCK: &str = "effort";
@@ -59,6 +65,8 @@ pub struct State {
     pub late: bool,
     /// The plant's real time since its previous tick, µs (NaN in lockstep).
     pub period_us: f64,
+    /// Each moving part's name and how far it has moved from its rest, m.
+    pub parts: Vec<(String, f64)>,
 }
 
 /// Why a message is not what this side expects.
@@ -71,7 +79,7 @@ impl State {
     pub fn encode(&self) -> Float64MultiArray {
         let dof = self.obs.q.len();
         let obs = &self.obs;
-        let mut data = Vec::with_capacity(2 * dof + 20);
+        let mut data = Vec::with_capacity(2 * dof + 20 + self.parts.len());
         data.push(self.tick as f64);
         data.push(obs.t);
         data.extend_from_slice(obs.q.as_slice());
@@ -83,14 +91,21 @@ impl State {
         data.push(self.round_trip_us);
         data.push(if self.late { 1.0 } else { 0.0 });
         data.push(self.period_us);
+        data.extend(self.parts.iter().map(|(_, offset)| offset));
+        let block = |label: String, size: usize| MultiArrayDimension {
+            label,
+            size: size as u32,
+            stride: size as u32,
+        };
         Float64MultiArray {
             dim: state_blocks(dof)
                 .iter()
-                .map(|(label, size)| MultiArrayDimension {
-                    label: (*label).to_owned(),
-                    size: *size as u32,
-                    stride: *size as u32,
-                })
+                .map(|(label, size)| block((*label).to_owned(), *size))
+                .chain(
+                    self.parts
+                        .iter()
+                        .map(|(name, _)| block(format!("{PART_PREFIX}{name}"), 1)),
+                )
                 .collect(),
             data_offset: 0,
             data,
@@ -105,13 +120,25 @@ impl State {
             .iter()
             .map(|dim| (dim.label.as_str(), dim.size as usize))
             .collect();
-        if labels != blocks {
+        if labels.get(..blocks.len()) != Some(blocks.as_slice()) {
             return Err(WireError(format!(
                 "a state's blocks are {labels:?}, not the {blocks:?} of a {dof}-joint plant: is the plant serving \
                  another robot?"
             )));
         }
-        let total: usize = blocks.iter().map(|(_, size)| size).sum();
+        let mut names = Vec::with_capacity(labels.len() - blocks.len());
+        for (label, size) in &labels[blocks.len()..] {
+            match label.strip_prefix(PART_PREFIX) {
+                Some(name) if *size == 1 => names.push(name.to_owned()),
+                _ => {
+                    return Err(WireError(format!(
+                        "a state's block `{label}` of length {size} after its fixed blocks is not a moving part's \
+                         (`{PART_PREFIX}NAME`, length 1)"
+                    )))
+                }
+            }
+        }
+        let total = blocks.iter().map(|(_, size)| size).sum::<usize>() + names.len();
         if array.data_offset != 0 || array.data.len() != total {
             return Err(WireError(format!(
                 "a state holds {} numbers from offset {}, not {total} from 0",
@@ -139,6 +166,10 @@ impl State {
         let round_trip_us = take(1)[0];
         let late = take(1)[0] != 0.0;
         let period_us = take(1)[0];
+        let parts = names
+            .into_iter()
+            .zip(take(labels.len() - blocks.len()).iter().copied())
+            .collect();
         if !(tick >= 0.0 && tick.fract() == 0.0 && tick < 2f64.powi(53)) {
             return Err(WireError(format!("a state's tick is {tick}, not a whole number")));
         }
@@ -148,6 +179,7 @@ impl State {
             round_trip_us,
             late,
             period_us,
+            parts,
         })
     }
 }
@@ -205,6 +237,7 @@ mod tests {
             round_trip_us: 87.5,
             late: true,
             period_us: f64::NAN,
+            parts: vec![("button".to_owned(), 0.00375), ("lever:2".to_owned(), -1e-9)],
         }
     }
 
@@ -217,10 +250,13 @@ mod tests {
         assert_eq!(got.obs, sent.obs);
         assert_eq!(got.round_trip_us, sent.round_trip_us);
         assert!(got.late && got.period_us.is_nan());
+        assert_eq!(got.parts, sent.parts);
         let mut none = sent.clone();
         none.obs.arm_contact_link = None;
+        none.parts.clear();
         let got = State::decode(&none.encode(), 7).expect("state");
         assert_eq!(got.obs.arm_contact_link, None);
+        assert!(got.parts.is_empty());
     }
 
     #[test]
@@ -230,6 +266,14 @@ mod tests {
         let mut short = state(7).encode();
         short.data.pop();
         assert!(State::decode(&short, 7).is_err());
+        let mut stranger = state(7).encode();
+        stranger.dim.last_mut().expect("a part").label = "lever".to_owned();
+        let err = State::decode(&stranger, 7).expect_err("not a part's label");
+        assert!(err.0.contains("`lever`"), "{err}");
+        let mut long = state(7).encode();
+        long.dim.last_mut().expect("a part").size = 2;
+        long.data.push(0.0);
+        assert!(State::decode(&long, 7).is_err());
     }
 
     #[test]

@@ -294,7 +294,7 @@ impl Plant for RemotePlant {
     }
 
     /// Asks the plant's own witness (the witness query): `None` when the plant has none, or does
-    /// not answer within [`WITNESS_TIMEOUT`] (a plant of an older skillc), so the run reports no
+    /// not answer within 2 s (a plant of an older skillc), so the run reports no
     /// witness rather than a wrong one.
     fn take_contact_audit(&mut self) -> Option<ContactAudit> {
         let replies = self

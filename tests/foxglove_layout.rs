@@ -1,4 +1,4 @@
-//! The Foxglove layout shipped in `docs/foxglove/`: every panel it places is configured, and
+//! The Foxglove layout shipped in `docs/foxglove/`: every panel it places is configured and titled, and
 //! every topic and message path it shows is one `skillc run -o log.mcap` writes, down to a field
 //! of the message's definition as the bag's schema carries it.
 #![cfg(feature = "mcap")]
@@ -96,6 +96,16 @@ fn every_panel_placed_is_configured_and_every_configured_panel_placed() {
         .collect();
     assert_eq!(ids, configured);
     assert!(ids.iter().any(|id| id.starts_with("3D!")), "a 3-D panel");
+    // Foxglove and Lichtblick title a panel by `foxglovePanelTitle`; a `title` key is ignored
+    // (Lichtblick 1.10 showed every plot as "Plot" while the layout said `title`).
+    for (id, config) in layout["configById"].as_object().expect("configById") {
+        let title = config["foxglovePanelTitle"].as_str().unwrap_or_default();
+        assert!(!title.is_empty(), "panel {id} has no foxglovePanelTitle");
+        assert!(
+            config.get("title").is_none(),
+            "panel {id} has a `title`, which viewers ignore"
+        );
+    }
 }
 
 #[test]

@@ -13,7 +13,7 @@ use std::path::Path;
 use std::sync::mpsc::Receiver;
 use std::thread::JoinHandle;
 
-use skill_runtime::exec::{CsvLog, LogTap, PartSample, RunLog, TapEvent, Tick};
+use skill_runtime::exec::{CsvLog, LogBatch, LogTap, RunLog, TapEvent};
 use skill_runtime::sim::Scene;
 
 use crate::atomic;
@@ -61,16 +61,10 @@ fn encode(mut encoder: Encoder, events: &Receiver<TapEvent>) -> Result<Vec<u8>, 
     while let Ok(event) = events.recv() {
         match event {
             TapEvent::Log { step, .. } => encoder.start_log(step),
-            TapEvent::Ticks {
-                states,
-                ticks,
-                part_names,
-                parts,
-                ..
-            } => {
+            TapEvent::Ticks { .. } => {
                 // After an error the rest is drained unencoded; the first error is the one told.
-                if failed.is_none() {
-                    failed = encoder.push(&states, &ticks, &part_names, &parts).err();
+                if let (None, Some((_, batch))) = (&failed, event.batch()) {
+                    failed = encoder.push(batch).err();
                 }
             }
             TapEvent::End => break,
@@ -88,9 +82,7 @@ pub fn write_after(path: &Path, logs: &[(Option<&str>, &RunLog)], scene: &Scene)
     let wrap = |err: String| Failure::Usage(format!("cannot write `{}`: {err}", path.display()));
     for (step, log) in logs {
         encoder.start_log(step.map(str::to_owned));
-        encoder
-            .push(&log.states, &log.ticks, &log.part_names, &log.parts)
-            .map_err(wrap)?;
+        encoder.push(log.batch()).map_err(wrap)?;
     }
     let bytes = encoder.finish().map_err(wrap)?;
     write_file(path, &bytes)
@@ -135,21 +127,14 @@ impl Encoder {
 
     /// The next ticks of the current log, and its part samples of those ticks (a CSV log has
     /// no columns for them).
-    fn push(
-        &mut self,
-        states: &[String],
-        ticks: &[Tick],
-        part_names: &[String],
-        parts: &[PartSample],
-    ) -> Result<(), String> {
+    fn push(&mut self, batch: LogBatch<'_>) -> Result<(), String> {
         match self {
             Encoder::Csv(csv) => {
-                let _ = (part_names, parts);
-                csv.push(states, ticks);
+                csv.push(batch.states, batch.ticks);
                 Ok(())
             }
             #[cfg(feature = "mcap")]
-            Encoder::Mcap(mcap) => mcap.push(states, ticks, part_names, parts),
+            Encoder::Mcap(mcap) => mcap.writer.push(batch).map_err(|err| error_chain(&err)),
         }
     }
 
@@ -193,18 +178,6 @@ impl McapEncoder {
 
     fn start_log(&mut self, step: Option<String>) {
         self.writer.start_log(step);
-    }
-
-    fn push(
-        &mut self,
-        states: &[String],
-        ticks: &[Tick],
-        part_names: &[String],
-        parts: &[PartSample],
-    ) -> Result<(), String> {
-        self.writer
-            .push(states, ticks, part_names, parts)
-            .map_err(|err| error_chain(&err))
     }
 
     fn finish(self) -> Result<Vec<u8>, String> {

@@ -720,9 +720,12 @@ fn a_run_log_written_in_batches_is_the_log_written_whole() {
             for (chunk, ticks) in log.ticks.chunks(batch).enumerate() {
                 let range = chunk * batch..chunk * batch + ticks.len();
                 let parts: Vec<_> = log.parts.iter().filter(|p| range.contains(&p.tick)).copied().collect();
-                writer
-                    .push(&log.states, ticks, &log.part_names, &parts)
-                    .expect("a batch");
+                let batch = skill_runtime::exec::LogBatch {
+                    ticks,
+                    parts: &parts,
+                    ..log.batch()
+                };
+                writer.push(batch).expect("a batch");
             }
         }
         let batched = writer.finish().expect("written in batches");

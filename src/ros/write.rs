@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::io::Cursor;
 
 use skill_runtime::demo::{Demo, WrenchFrame};
-use skill_runtime::exec::{PartSample, RunLog, Tick};
+use skill_runtime::exec::{LogBatch, RunLog};
 
 use skill_runtime::sim::{ObjectShape, ObjectSpec};
 
@@ -331,7 +331,7 @@ pub fn write_run_log(
     let mut writer = RunLogWriter::new(joint_names, description, objects);
     for (step, log) in logs {
         writer.start_log(step.map(str::to_owned));
-        writer.push(&log.states, &log.ticks, &log.part_names, &log.parts)?;
+        writer.push(log.batch())?;
     }
     writer.finish()
 }
@@ -421,16 +421,15 @@ impl RunLogWriter {
         Ok((bag, kinematics))
     }
 
-    /// Writes `ticks`, the next ticks of the current log, whose state names are `states`, and
-    /// the log's part samples `parts` of those ticks (their ticks count the log's, their parts
-    /// index `part_names`): each moves its object on `/scene`.
-    pub fn push(
-        &mut self,
-        states: &[String],
-        ticks: &[Tick],
-        part_names: &[String],
-        parts: &[PartSample],
-    ) -> Result<(), BagError> {
+    /// Writes `batch`, the next ticks of the current log with their part samples: each sample
+    /// moves its object on `/scene`.
+    pub fn push(&mut self, batch: LogBatch<'_>) -> Result<(), BagError> {
+        let LogBatch {
+            states,
+            ticks,
+            part_names,
+            parts,
+        } = batch;
         let Some(first) = ticks.first() else { return Ok(()) };
         if self.bag.is_none() {
             self.bag = Some(self.begin(Time::from_seconds(first.t_s))?);

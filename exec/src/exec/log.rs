@@ -122,6 +122,22 @@ impl<const N: usize> std::fmt::Debug for JointValues<N> {
     }
 }
 
+/// A stretch of a log as its writers take it: the log's state and part names as they stand,
+/// ticks in order, and the part samples of those ticks (their ticks count the whole log's,
+/// their parts index `part_names`). A whole log is [`RunLog::batch`]; a tap's batches are
+/// [`TapEvent::batch`].
+#[derive(Debug, Clone, Copy)]
+pub struct LogBatch<'a> {
+    /// State names the ticks refer to.
+    pub states: &'a [String],
+    /// The ticks.
+    pub ticks: &'a [Tick],
+    /// The moving parts' names.
+    pub part_names: &'a [String],
+    /// Where the parts stood during these ticks.
+    pub parts: &'a [PartSample],
+}
+
 /// Every tick of a run, with the names of the states ticks refer to, and where the scene's
 /// moving parts went.
 #[derive(Debug, Default)]
@@ -251,6 +267,31 @@ pub enum TapEvent {
     End,
 }
 
+impl TapEvent {
+    /// The ticks this event carries as a batch, and the log they are of (`None` for the other
+    /// events).
+    pub fn batch(&self) -> Option<(usize, LogBatch<'_>)> {
+        match self {
+            TapEvent::Ticks {
+                log,
+                states,
+                ticks,
+                part_names,
+                parts,
+            } => Some((
+                *log,
+                LogBatch {
+                    states,
+                    ticks,
+                    part_names,
+                    parts,
+                },
+            )),
+            TapEvent::Log { .. } | TapEvent::End => None,
+        }
+    }
+}
+
 impl LogTap {
     /// A tap and the receiving end of its channel.
     pub fn channel() -> (LogTap, std::sync::mpsc::Receiver<TapEvent>) {
@@ -269,6 +310,16 @@ impl LogTap {
 }
 
 impl RunLog {
+    /// The whole log as one batch.
+    pub fn batch(&self) -> LogBatch<'_> {
+        LogBatch {
+            states: &self.states,
+            ticks: &self.ticks,
+            part_names: &self.part_names,
+            parts: &self.parts,
+        }
+    }
+
     /// An empty log whose ticks `tap` (if any) also receives, as a log of task step `step`.
     pub fn tapped(tap: Option<&LogTap>, step: Option<&str>) -> RunLog {
         let tap = tap.map(|tap| {

@@ -30,8 +30,8 @@ mod run;
 pub use bind::{bind, BindError, BoundSkill};
 pub use limits::{apply_limits, learned_peak_force, learned_workspace, limits_for};
 pub use log::{
-    csv as logs_csv, CsvLog, JointValues, LogTap, PartSample, RunLog, TapEvent, Tick, MAX_INLINE_DOF, PART_MOVE_M,
-    PART_PERIOD_TICKS,
+    csv as logs_csv, CsvLog, JointValues, LogBatch, LogTap, PartSample, RunLog, TapEvent, Tick, MAX_INLINE_DOF,
+    PART_MOVE_M, PART_PERIOD_TICKS,
 };
 pub use motion::offset_to_place;
 pub use rig::Rig;

@@ -89,7 +89,7 @@ pub const FIFO_PRIORITY: u8 = 50;
 /// before [`open`]: Zenoh's threads inherit it, and the loop's messages pass through them. It
 /// needs root, `CAP_SYS_NICE` or an `rtprio` limit (`ulimit -r`) of 50; otherwise it changes
 /// nothing and returns the system's words. On a 2-core VM it took the late commands of a
-/// realtime slide from 0.3-0.9 % of ticks to 0.02-0.09 % (`docs/split.md`).
+/// realtime slide from 0.3-2.1 % of ticks to 0.00-0.09 % (`docs/split.md`).
 pub fn realtime_scheduling() -> Result<(), String> {
     use thread_priority::{
         set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy, ThreadPriority,

@@ -28,9 +28,9 @@ pub struct PlantArgs {
     /// The ROS domain (0-232), as `ROS_DOMAIN_ID` sets it for ROS 2 tools.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232))]
     pub domain: u32,
-    /// Stay at normal priority instead of taking SCHED_FIFO: for a plant that serves only
-    /// lockstep runs, which then take about a fifth less time (realtime runs get more late
-    /// commands).
+    /// Stay at normal priority instead of taking SCHED_FIFO, e.g. on a machine shared with work
+    /// that must not wait behind the plant; realtime runs then get more late commands (lockstep
+    /// runs are the same either way).
     #[arg(long)]
     pub no_fifo: bool,
 }

@@ -61,12 +61,9 @@ fn encode(mut encoder: Encoder, events: &Receiver<TapEvent>) -> Result<Vec<u8>, 
     while let Ok(event) = events.recv() {
         match event {
             TapEvent::Log { step, .. } => encoder.start_log(step),
-            TapEvent::Ticks { .. } => {
-                // After an error the rest is drained unencoded; the first error is the one told.
-                if let (None, Some((_, batch))) = (&failed, event.batch()) {
-                    failed = encoder.push(batch).err();
-                }
-            }
+            // After an error the rest is drained unencoded; the first error is the one told.
+            TapEvent::Ticks { .. } if failed.is_some() => {}
+            ticks @ TapEvent::Ticks { .. } => failed = ticks.batch().and_then(|batch| encoder.push(batch).err()),
             TapEvent::End => break,
         }
     }
@@ -134,7 +131,7 @@ impl Encoder {
                 Ok(())
             }
             #[cfg(feature = "mcap")]
-            Encoder::Mcap(mcap) => mcap.writer.push(batch).map_err(|err| error_chain(&err)),
+            Encoder::Mcap(mcap) => mcap.push(batch),
         }
     }
 
@@ -178,6 +175,10 @@ impl McapEncoder {
 
     fn start_log(&mut self, step: Option<String>) {
         self.writer.start_log(step);
+    }
+
+    fn push(&mut self, batch: LogBatch<'_>) -> Result<(), String> {
+        self.writer.push(batch).map_err(|err| error_chain(&err))
     }
 
     fn finish(self) -> Result<Vec<u8>, String> {

@@ -268,25 +268,21 @@ pub enum TapEvent {
 }
 
 impl TapEvent {
-    /// The ticks this event carries as a batch, and the log they are of (`None` for the other
-    /// events).
-    pub fn batch(&self) -> Option<(usize, LogBatch<'_>)> {
+    /// The ticks this event carries, as a batch (`None` for the other events).
+    pub fn batch(&self) -> Option<LogBatch<'_>> {
         match self {
             TapEvent::Ticks {
-                log,
                 states,
                 ticks,
                 part_names,
                 parts,
-            } => Some((
-                *log,
-                LogBatch {
-                    states,
-                    ticks,
-                    part_names,
-                    parts,
-                },
-            )),
+                ..
+            } => Some(LogBatch {
+                states,
+                ticks,
+                part_names,
+                parts,
+            }),
             TapEvent::Log { .. } | TapEvent::End => None,
         }
     }

@@ -139,7 +139,7 @@ def main():
           f"sequence {sequences[0]}..{sequences[-1]}, GID = XXH3-128 of its token")
 
     # 3. Drive the plant as a foreign controller: each command steps it once (lockstep).
-    cmd_key, cmd_token = topic_key("MS", "%joint_effort_commands")
+    cmd_key, _ = topic_key("MS", "%joint_effort_commands")
     publisher = session.declare_publisher(cmd_key)
     own_gid = xxhash.xxh3_128(b"zenoh_ros2_peer").intdigest().to_bytes(16, "little")
     with lock:

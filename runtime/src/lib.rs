@@ -5,15 +5,15 @@
 //! their old paths and adds what needs two rooms at once: a simulated run ([`exec::simulate`]).
 #![warn(missing_docs)]
 pub use skill_exec::{control, safety};
-pub use skill_learn::{demo, demogen, learn, rng, skill};
+pub use skill_learn::{demo, demogen, rng, skill};
 pub use skill_model::dmp;
-pub use skill_robot::{plant, robot};
-pub use skill_sim::sim;
+pub use skill_robot::plant;
+pub use {skill_learn as learn, skill_robot as robot, skill_sim as sim};
 
-/// The skill engine ([`skill_exec::exec`]) and simulated runs of it ([`simulate`](crate::exec::simulate),
+/// The skill engine ([`skill_exec`]) and simulated runs of it ([`simulate`](crate::exec::simulate),
 /// [`simulate_task`](crate::exec::simulate_task)).
 pub mod exec {
-    pub use skill_exec::exec::*;
+    pub use skill_exec::*;
 
     mod session;
     pub use session::{

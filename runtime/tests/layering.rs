@@ -8,14 +8,14 @@ use std::path::Path;
 
 /// Every workspace crate of the runtime, by folder.
 const CRATES: [(&str, &str); 8] = [
-    ("skill-robot", "robot"),
-    ("skill-model", "model"),
-    ("skill-learn", "learn"),
-    ("skill-sim", "sim"),
-    ("skill-exec", "exec"),
+    ("skill-robot", "runtime/robot"),
+    ("skill-model", "runtime/model"),
+    ("skill-learn", "runtime/learn"),
+    ("skill-sim", "runtime/sim"),
+    ("skill-exec", "runtime/exec"),
     ("skill-runtime", "runtime"),
-    ("skill-ros", "ros"),
-    ("skill-transport", "transport"),
+    ("skill-ros", "runtime/ros"),
+    ("skill-transport", "runtime/transport"),
 ];
 
 /// Each crate's normal (not dev) dependencies, by name.

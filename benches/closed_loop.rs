@@ -40,15 +40,15 @@ fn run(
 
 fn slide_closed_loop(c: &mut Criterion) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let Ok((_, skill)) = skillc::load::load_skill(&root.join("stdlib-skills/slide.skill"), None) else {
+    let Ok((_, skill)) = skill_kit::load::load_skill(&root.join("stdlib-skills/slide.skill"), None) else {
         panic!("slide compiles")
     };
     let Ok(learned) =
-        skillc::load::learn_from_files(&skill, &root.join("examples/demos/slide.csv"), &LearnOptions::default())
+        skill_kit::load::learn_from_files(&skill, &root.join("examples/demos/slide.csv"), &LearnOptions::default())
     else {
         panic!("slide learns")
     };
-    let Ok(scene) = skillc::load::load_scene(&root.join("examples/scenes/table.toml"), &[]) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root.join("examples/scenes/table.toml"), &[]) else {
         panic!("scene")
     };
     let bound = bind(&skill, &learned).expect("binds");

@@ -2,9 +2,9 @@
 //! ±5 samples of `kneighbors_graph(t, 10)`) and at k = 10, for 10 000, 50 000 and 100 000
 //! samples of a 6-D slide-like demonstration; average linkage and the time-feature variant at
 //! 10 000; CHAMP change points on a 1-D signal of 10 000 samples with 10 true breaks (the data
-//! of `bench/peers/ruptures_kernelcpd.py`) and on the 6-D demonstration.
+//! of `benches/peers/ruptures_kernelcpd.py`) and on the 6-D demonstration.
 //!
-//! The data generators are mirrored in `bench/peers/` so that the peers see the same samples.
+//! The data generators are mirrored in `benches/peers/` so that the peers see the same samples.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use skill_runtime::learn::segment::{
     changepoint, cluster, standardise, ChangepointConfig, ClusterConfig, Features, Linkage, SegmentModel, Temporal,

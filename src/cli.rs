@@ -3,11 +3,11 @@
 //! Exit codes: 0 success (warnings allowed), 1 problems found in the input (diagnostics,
 //! unformatted files, a failed skill), 2 usage or IO errors.
 
-use crate::load::Failure;
-use crate::out::{self, Verbosity};
-use crate::{atomic, frontend, render};
 use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
 use skill_compiler::graph::GraphFormat;
+use skill_kit::load::Failure;
+use skill_kit::out::{self, Verbosity};
+use skill_kit::{atomic, frontend, render};
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -128,7 +128,7 @@ pub enum Command {
   skillc eval --skill slide --out slide-report
   skillc eval --robot iiwa14                   # the same skills and scenes on the KUKA LBR iiwa 14
   skillc eval --trials my-trials.toml --threads 1")]
-    Eval(crate::eval::EvalArgs),
+    Eval(skill_eval::EvalArgs),
     /// Inspect a robot description: its chain, and the tool pose, Jacobian and gravity torques at a configuration.
     #[command(after_help = "Examples:
   skillc robot examples/robots/lwr4.urdf
@@ -226,11 +226,11 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Rollout(args) => crate::learn_cmd::rollout(&args, verbosity),
         Command::Run(args) => crate::run_cmd::run(&args, verbosity),
         Command::Plant(args) => crate::link::plant(&args, verbosity),
-        Command::Eval(args) => crate::eval::run(&args, verbosity),
+        Command::Eval(args) => skill_eval::run(&args, verbosity),
         Command::Robot(args) => crate::robot_cmd::run(&args),
         Command::Completions { shell } => completions(shell),
         Command::Man { out } => man(out.as_deref(), verbosity),
-        Command::Lsp => crate::lsp::run_stdio(),
+        Command::Lsp => skill_language_server::run_stdio(),
     };
     ExitCode::from(code)
 }

@@ -19,8 +19,8 @@ use serde::Serialize;
 use skill_runtime::demo::{prepare, Demo, Dialect, PreprocessConfig, WrenchOptions};
 use skill_runtime::learn::phases::{contact_phases, ContactPhase};
 
-use crate::load::{read_demo, Failure};
-use crate::out::{self, Verbosity};
+use skill_kit::load::{read_demo, Failure};
+use skill_kit::out::{self, Verbosity};
 
 /// Arguments of `skillc identify`.
 #[derive(Debug, Clone, clap::Args)]
@@ -501,7 +501,7 @@ fn text(id: &Identification, demo: &Path) -> String {
 /// Runs `skillc identify`.
 pub fn run(args: &IdentifyArgs, _verbosity: Verbosity) -> u8 {
     let result = (|| -> Result<(), Failure> {
-        let (loaded, _, _) = read_demo(&args.demo, &Dialect::default(), &crate::ros::BagOptions::default())?;
+        let (loaded, _, _) = read_demo(&args.demo, &Dialect::default(), &skill_ros::bag::BagOptions::default())?;
         let wrench = WrenchOptions {
             declared: loaded.wrench,
             keep_bias: false,

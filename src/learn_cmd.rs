@@ -10,10 +10,10 @@ use skill_runtime::exec::bind;
 use skill_runtime::skill::rollout::PreviewSample;
 use skill_runtime::skill::{LearnOptions, Learned, LearnedForce, LearnedFrame};
 
-use crate::load::{learn_from_source, load_skill, read_learned, Failure};
-use crate::out::{self, Verbosity};
-use crate::plot::{self, Plot, Subject};
-use crate::{atomic, limits};
+use skill_kit::load::{learn_from_source, load_skill, read_learned, Failure};
+use skill_kit::out::{self, Verbosity};
+use skill_kit::plot::{self, Plot, Subject};
+use skill_kit::{atomic, limits};
 
 /// Arguments of `skillc learn`.
 #[derive(Debug, Clone, clap::Args)]
@@ -184,7 +184,7 @@ pub fn run(args: &LearnArgs, verbosity: Verbosity) -> u8 {
 /// silently ignored.
 fn refuse_other_kinds_flags(args: &LearnArgs) -> Result<(), Failure> {
     let demo = args.demo.display();
-    if crate::ros::is_mcap(&args.demo) {
+    if skill_ros::bag::is_mcap(&args.demo) {
         let csv_flags = [
             ("--delimiter", args.delimiter.is_some()),
             ("--columns", args.columns.is_some()),
@@ -232,7 +232,7 @@ fn learn(args: &LearnArgs) -> Result<(String, Vec<String>), Failure> {
         delimiter: args.delimiter,
         columns: args.columns.clone().unwrap_or_default(),
     };
-    let bag = crate::ros::BagOptions {
+    let bag = skill_ros::bag::BagOptions {
         pose_topic: args.pose_topic.clone(),
         wrench_topic: args.wrench_topic.clone(),
         tf_parent: args.tf_parent.clone(),

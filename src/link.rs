@@ -5,8 +5,8 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use crate::load::{error_chain, load_scene, Failure};
-use crate::out::Verbosity;
+use skill_kit::load::{error_chain, load_scene, Failure};
+use skill_kit::out::Verbosity;
 use skill_runtime::sim::Scene;
 
 /// Arguments of `skillc plant`.
@@ -60,7 +60,7 @@ pub fn scene_with_robot(path: &std::path::Path, sets: &[String], robot: Option<&
     let Some(name) = robot else {
         return load_scene(path, sets);
     };
-    let swap = crate::eval::robot::Swap::new(name, &crate::defaults::root().map_err(Failure::Usage)?)?;
+    let swap = skill_eval::robot::Swap::new(name, &skill_kit::defaults::root().map_err(Failure::Usage)?)?;
     let mut all = sets.to_vec();
     all.extend(swap.sets(path, sets).map_err(Failure::Input)?);
     load_scene(path, &all)
@@ -93,7 +93,7 @@ mod enabled {
         let scene = scene_with_robot(&args.scene, &args.sets, args.robot.as_deref())?;
         let mut plant = RapierPlant::from_scene(&scene).map_err(|err| Failure::Input(error_chain(&err)))?;
         let robot = plant.robot().clone();
-        let stop = crate::atomic::stop_on_signal();
+        let stop = skill_kit::atomic::stop_on_signal();
         // Before the session: Zenoh's threads, which carry the loop's messages, inherit it.
         let scheduling = if args.no_fifo {
             "normal (--no-fifo)".to_owned()
@@ -110,7 +110,7 @@ mod enabled {
         };
         if !verbosity.quiet() {
             // A closed standard output does not stop the plant: it serves on and says nothing.
-            let _ = crate::out::print_or_code(&format!(
+            let _ = skill_kit::out::print_or_code(&format!(
                 "plant: serving `{}` ({}, {} joints) at {} on ROS domain {}: /joint_states, /wrench and \
                  /skillc/state out, /joint_effort_commands in; Ctrl-C stops\n  scheduling: {scheduling}\n",
                 scene.file(),
@@ -196,7 +196,7 @@ pub fn plant(args: &PlantArgs, verbosity: Verbosity) -> u8 {
         Err(without_zenoh())
     };
     match result {
-        Ok(text) => match crate::out::print_or_code(&text) {
+        Ok(text) => match skill_kit::out::print_or_code(&text) {
             Ok(()) => 0,
             Err(code) => code,
         },

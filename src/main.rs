@@ -3,10 +3,10 @@
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
-    skillc::out::install_print_panic_backstop();
+    skill_kit::out::install_print_panic_backstop();
     // Temporaries are removed on SIGINT/SIGTERM/SIGHUP (exit 130/143/129); without the handler
     // a signal would leave them behind, so not having it is worth a word, not a refusal to run.
-    if let Err(err) = skillc::atomic::install_signal_cleanup() {
+    if let Err(err) = skill_kit::atomic::install_signal_cleanup() {
         eprintln!("warning: cannot handle signals ({err}); an interrupt may leave temporary files");
     }
     let cli = skillc::Cli::parse();

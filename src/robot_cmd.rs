@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use skill_runtime::robot::{BuiltinRobot, Robot, RobotError};
 
-use crate::load::{error_chain, Failure};
-use crate::out;
+use skill_kit::load::{error_chain, Failure};
+use skill_kit::out;
 
 /// Print a robot's chain (joints, axes, limits, masses) and, at a configuration, the tool pose,
 /// the tool Jacobian and the gravity torques.

@@ -9,12 +9,12 @@ use skill_runtime::exec::{
 };
 use skill_runtime::skill::{LearnOptions, Learned};
 
-use crate::atomic;
 use crate::link::scene_with_robot;
-use crate::load::{error_chain, learn_from_files, learn_from_source, load_skill_with, read_learned, Failure};
-use crate::out::Verbosity;
-use crate::plot::{self, Plot, Subject, Trial};
 use crate::run_log::{self, LiveLog};
+use skill_kit::atomic;
+use skill_kit::load::{error_chain, learn_from_files, learn_from_source, load_skill_with, read_learned, Failure};
+use skill_kit::out::Verbosity;
+use skill_kit::plot::{self, Plot, Subject, Trial};
 use skill_runtime::demo::Dialect;
 
 /// Arguments of `skillc run`.
@@ -74,15 +74,15 @@ pub struct RunArgs {
     #[arg(long)]
     pub no_prepose: bool,
     /// Multiply every desired force and force threshold.
-    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::factor)]
+    #[arg(long, default_value_t = 1.0, value_parser = skill_kit::limits::factor)]
     pub force_scale: f64,
     /// Multiply the motion speed.
-    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::factor)]
+    #[arg(long, default_value_t = 1.0, value_parser = skill_kit::limits::factor)]
     pub speed: f64,
     /// Tighten or loosen a safety limit, in SI units, e.g. `--limit force=60` (N),
     /// `--limit speed=0.1` (m/s); `inf` switches a check off. Names: force, moment, speed,
     /// angular_speed, joint_margin, joint_speed, saturation, tracking, tracking_angle, arm_contact (repeatable).
-    #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = parse_limit)]
+    #[arg(long = "limit", value_name = "NAME=VALUE", value_parser = skill_kit::limits::parse_limit)]
     pub limits: Vec<(String, f64)>,
     /// Run on this shipped robot (`lwr4`, `iiwa14`) instead of the scene's, its tool starting
     /// where the scene's robot starts its tool.
@@ -123,17 +123,6 @@ fn live_log(args: &RunArgs, scene: &skill_runtime::sim::Scene) -> Result<Option<
     }
 }
 
-/// Parses `NAME=VALUE` for `--limit`, checking the name and that the value is positive.
-pub fn parse_limit(text: &str) -> Result<(String, f64), String> {
-    let (name, value) = text
-        .split_once('=')
-        .ok_or_else(|| format!("`{text}`: write NAME=VALUE, e.g. force=60"))?;
-    let value = crate::limits::number_or_inf(value).map_err(|err| format!("`{text}`: {err}"))?;
-    let mut probe = skill_runtime::safety::Limits::for_skill(0.0, None);
-    probe.set(name.trim(), value).map_err(|err| err.to_string())?;
-    Ok((name.trim().to_string(), value))
-}
-
 /// Runs `skillc run`. `--quiet` prints nothing but errors (a run that ends in failure is one);
 /// `--verbose` adds the wall-clock time.
 pub fn run(args: &RunArgs, verbosity: Verbosity) -> u8 {
@@ -149,7 +138,7 @@ pub fn run(args: &RunArgs, verbosity: Verbosity) -> u8 {
                 if failed {
                     eprintln!("error: `{}` ended in failure: {}", args.file.display(), report.message);
                 }
-            } else if let Err(code) = crate::out::print_or_code(&text) {
+            } else if let Err(code) = skill_kit::out::print_or_code(&text) {
                 return code;
             }
             u8::from(failed)
@@ -159,15 +148,15 @@ pub fn run(args: &RunArgs, verbosity: Verbosity) -> u8 {
 }
 
 /// The bag topics the flags name (`--pose-topic` ...), refused for a CSV demonstration.
-fn bag_options(args: &RunArgs) -> Result<crate::ros::BagOptions, Failure> {
-    let bag = crate::ros::BagOptions {
+fn bag_options(args: &RunArgs) -> Result<skill_ros::bag::BagOptions, Failure> {
+    let bag = skill_ros::bag::BagOptions {
         pose_topic: args.pose_topic.clone(),
         wrench_topic: args.wrench_topic.clone(),
         tf_parent: args.tf_parent.clone(),
         tf_child: args.tf_child.clone(),
     };
-    let is_bag = args.demo.as_deref().is_some_and(crate::ros::is_mcap);
-    if bag != crate::ros::BagOptions::default() && !is_bag {
+    let is_bag = args.demo.as_deref().is_some_and(skill_ros::bag::is_mcap);
+    if bag != skill_ros::bag::BagOptions::default() && !is_bag {
         return Err(Failure::Usage(
             "--pose-topic, --wrench-topic, --tf-parent and --tf-child are for a --demo that is a ROS 2 bag (`.mcap`)"
                 .into(),
@@ -184,7 +173,7 @@ fn run_inner(args: &RunArgs) -> Result<(RunReport, String), Failure> {
         atomic::refuse_inputs(out, "-o", &inputs).map_err(Failure::Usage)?;
     }
     if args.skill.is_none() {
-        let compilation = crate::frontend::compile_path_with(&args.file, &args.params)
+        let compilation = skill_kit::frontend::compile_path_with(&args.file, &args.params)
             .map_err(|err| Failure::Usage(err.to_string()))?;
         if let Some(program) = &compilation.program {
             let task = match &args.task {
@@ -406,23 +395,17 @@ fn step_learned(program: &skill_ir::Program, step: &skill_ir::Step) -> Result<(s
         .cloned()
         .ok_or_else(|| Failure::Input(format!("step `{}` runs unknown skill `{}`", step.name, step.skill)))?;
     let learned = match &step.input {
-        skill_ir::StepInput::Demo(path) => learn_from_files(&skill, Path::new(path), &step_learn_options(step))
-            .map_err(|failure| match failure {
-                Failure::Input(message) => Failure::Input(format!("step `{}`: {message}", step.name)),
-                other => other,
-            })?,
+        skill_ir::StepInput::Demo(path) => {
+            learn_from_files(&skill, Path::new(path), &skill_kit::load::step_learn_options(step)).map_err(
+                |failure| match failure {
+                    Failure::Input(message) => Failure::Input(format!("step `{}`: {message}", step.name)),
+                    other => other,
+                },
+            )?
+        }
         skill_ir::StepInput::Learned(path) => read_learned(Path::new(path))?,
     };
     Ok((skill, learned))
-}
-
-/// How a task step learns from its demonstration: the contact phase its `phase:` names, and
-/// otherwise as `skillc learn` does with no flags.
-pub fn step_learn_options(step: &skill_ir::Step) -> LearnOptions {
-    LearnOptions {
-        phase: step.phase.map(|phase| phase as usize),
-        ..LearnOptions::default()
-    }
 }
 
 /// `step `last` learned contact phase 3 of 3 (14.20-20.40 s, median 6.6 N), as its `phase:` says`,

@@ -6,7 +6,7 @@
 //! run's [`LogTap`] hands the ticks over in batches as they are logged and a writer thread
 //! encodes them on the other core, so that the file is ready soon after the last tick (0.9 and
 //! 1.6 µs a tick on top, most of it the file's write at the end: benches/README.md). The bytes are the same either way (both
-//! go through [`CsvLog`] and [`crate::ros::RunLogWriter`]), and the file is written
+//! go through [`CsvLog`] and [`skill_ros::bag::RunLogWriter`]), and the file is written
 //! atomically at the end: a run that fails to start writes nothing.
 
 use std::path::Path;
@@ -16,8 +16,8 @@ use std::thread::JoinHandle;
 use skill_runtime::exec::{CsvLog, LogBatch, LogTap, RunLog, TapEvent};
 use skill_runtime::sim::Scene;
 
-use crate::atomic;
-use crate::load::{error_chain, Failure};
+use skill_kit::atomic;
+use skill_kit::load::{error_chain, Failure};
 
 /// A log being encoded while its run goes on.
 pub struct LiveLog {
@@ -99,7 +99,7 @@ enum Encoder {
 impl Encoder {
     /// MCAP when `path` ends in `.mcap`, else CSV.
     fn for_path(path: &Path, scene: &Scene) -> Result<Encoder, Failure> {
-        if !crate::ros::is_mcap(path) {
+        if !skill_ros::bag::is_mcap(path) {
             return Ok(Encoder::Csv(CsvLog::default()));
         }
         #[cfg(feature = "mcap")]
@@ -148,7 +148,7 @@ impl Encoder {
 /// `/robot_description`) when the scene's URDF reads, and the scene's objects.
 #[cfg(feature = "mcap")]
 struct McapEncoder {
-    writer: crate::ros::RunLogWriter,
+    writer: skill_ros::bag::RunLogWriter,
 }
 
 #[cfg(feature = "mcap")]
@@ -165,11 +165,11 @@ impl McapEncoder {
             .map(|robot| robot.joints().iter().map(|joint| joint.name.clone()).collect())
             .unwrap_or_default();
         let description = match (&robot, &urdf) {
-            (Some(robot), Some(urdf)) => Some(crate::ros::RobotDescription { robot, urdf }),
+            (Some(robot), Some(urdf)) => Some(skill_ros::bag::RobotDescription { robot, urdf }),
             _ => None,
         };
         McapEncoder {
-            writer: crate::ros::RunLogWriter::new(&names, description.as_ref(), &scene.spec().objects),
+            writer: skill_ros::bag::RunLogWriter::new(&names, description.as_ref(), &scene.spec().objects),
         }
     }
 

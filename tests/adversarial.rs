@@ -631,7 +631,7 @@ fn scenes_that_cannot_be_read_are_io_errors_named_once() {
 }
 
 /// Files that still print with `print!`/`println!` (their owner routes them through
-/// `skillc::out::print`); the backstop in `main` keeps them from panicking meanwhile.
+/// `skill_kit::out::print`); the backstop in `main` keeps them from panicking meanwhile.
 const PRINTING: [&str; 0] = [];
 
 /// Whether `line` calls `mac` itself (not `eprintln!` for `println!`).
@@ -672,7 +672,7 @@ fn primary_output_goes_through_one_writer() {
         }
         assert!(
             !prints,
-            "`{name}` prints with print!/println!, which panic on a closed or full stdout: use skillc::out::print"
+            "`{name}` prints with print!/println!, which panic on a closed or full stdout: use skill_kit::out::print"
         );
     }
 }

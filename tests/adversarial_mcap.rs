@@ -13,9 +13,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use skill_ros::bag::write_demo;
+use skill_ros::msgs::{MsgType, PoseStamped, WrenchStamped};
 use skill_runtime::demo::{parse_csv, ReadOptions};
-use skillc::ros::msgs::{MsgType, PoseStamped, WrenchStamped};
-use skillc::ros::write_demo;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -68,7 +68,7 @@ fn bag(poses: usize) -> Vec<u8> {
                 .expect("channel"),
         );
     }
-    let stamp = |k: usize| skillc::ros::msgs::Time::from_seconds(k as f64 * 1e-3);
+    let stamp = |k: usize| skill_ros::msgs::Time::from_seconds(k as f64 * 1e-3);
     let payloads: [Vec<Vec<u8>>; 2] = [
         (0..poses)
             .map(|k| {
@@ -343,7 +343,7 @@ fn demo_channels() -> Vec<(&'static str, &'static str, String)> {
 fn demo_messages(demo: &skill_runtime::demo::Demo) -> Vec<Message> {
     let mut out = Vec::new();
     for k in 0..demo.len() {
-        let stamp = skillc::ros::msgs::Time::from_seconds(demo.t_s[k]);
+        let stamp = skill_ros::msgs::Time::from_seconds(demo.t_s[k]);
         let time = stamp.nanos() as u64;
         let (p, q) = (demo.position_m[k], demo.orientation[k].quaternion());
         let mut pose = PoseStamped {
@@ -658,7 +658,7 @@ fn zero_length_frame_ids_read_as_empty_without_misaligning_later_fields() {
         write_bag(mcap::WriteOptions::new(), &demo_channels(), &zero),
     )
     .expect("write");
-    let read = |name: &str| skillc::ros::read_demo(&dir.join(name), &Default::default()).expect("reads");
+    let read = |name: &str| skill_ros::bag::read_demo(&dir.join(name), &Default::default()).expect("reads");
     let (nul, zero) = (read("nul.mcap"), read("zero.mcap"));
     assert_eq!(zero.loaded.demo.len(), demo.len());
     assert_eq!(zero.loaded.demo.position_m, nul.loaded.demo.position_m);

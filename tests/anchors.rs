@@ -15,7 +15,7 @@ fn root() -> PathBuf {
 /// Runs the task of `file` with its steps edited by `edit`, on the table 6 cm lower.
 fn run_task(file: &str, edit: impl Fn(&mut [skill_ir::Step])) -> TaskRun {
     let file = root().join(file);
-    let compilation = skillc::frontend::compile_path(&file).expect("reads");
+    let compilation = skill_kit::frontend::compile_path(&file).expect("reads");
     let mut program = compilation.program.expect("the example task compiles");
     edit(&mut program.tasks[0].steps);
     let task = &program.tasks[0];
@@ -32,7 +32,7 @@ fn run_task(file: &str, edit: impl Fn(&mut [skill_ir::Step])) -> TaskRun {
             let skill_ir::StepInput::Demo(demo) = &step.input else {
                 panic!("the example learns from demonstrations")
             };
-            skillc::load::learn_from_files(skill, std::path::Path::new(demo), &LearnOptions::default())
+            skill_kit::load::learn_from_files(skill, std::path::Path::new(demo), &LearnOptions::default())
                 .unwrap_or_else(|_| panic!("learns {demo}"))
         })
         .collect();
@@ -46,7 +46,7 @@ fn run_task(file: &str, edit: impl Fn(&mut [skill_ir::Step])) -> TaskRun {
         })
         .collect();
     let sets = vec!["table.z=0.215".to_string()];
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &sets) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/table.toml"), &sets) else {
         panic!("scene loads")
     };
     simulate_task(&scene, &steps, &[], &ExecOptions::default()).expect("runs")

@@ -16,11 +16,11 @@ fn root() -> PathBuf {
 
 fn learn() -> (skill_ir::Skill, Learned) {
     let file = root().join("tests/data/touch_capture.skill");
-    let Ok((_, ir)) = skillc::load::load_skill(&file, None) else {
+    let Ok((_, ir)) = skill_kit::load::load_skill(&file, None) else {
         panic!("touch_capture.skill compiles")
     };
     let demo = root().join("examples/demos/touch.csv");
-    let Ok(learned) = skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skill_kit::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
         panic!("touch_capture.skill learns from the touch demonstration")
     };
     (ir, learned)
@@ -28,7 +28,7 @@ fn learn() -> (skill_ir::Skill, Learned) {
 
 fn run(skill: &skill_ir::Skill, learned: &Learned, sets: &[&str]) -> (RunReport, RunLog) {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &sets) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/table.toml"), &sets) else {
         panic!("scene loads")
     };
     let bound = bind(skill, learned).expect("binds");

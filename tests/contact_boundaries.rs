@@ -96,10 +96,10 @@ fn the_wipe_starts_where_the_tool_landed_not_where_the_force_rose() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let demo = dir.join("wipe_ramp.csv");
     std::fs::write(&demo, demonstration()).expect("demo written");
-    let Ok((_, ir)) = skillc::load::load_skill(&root.join("stdlib-skills/wipe.skill"), None) else {
+    let Ok((_, ir)) = skill_kit::load::load_skill(&root.join("stdlib-skills/wipe.skill"), None) else {
         panic!("the wipe compiles")
     };
-    let learned = match skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) {
+    let learned = match skill_kit::load::learn_from_files(&ir, &demo, &LearnOptions::default()) {
         Ok(learned) => learned,
         Err(error) => panic!("the wipe learns: {error:?}"),
     };

@@ -28,8 +28,9 @@ fn root() -> PathBuf {
 }
 
 fn learn(demo: &Path) -> Learned {
-    let (_, skill) = skillc::load::load_skill(&root().join("stdlib-skills/wipe.skill"), None).expect("wipe compiles");
-    skillc::load::learn_from_files(&skill, demo, &Default::default()).expect("learns")
+    let (_, skill) =
+        skill_kit::load::load_skill(&root().join("stdlib-skills/wipe.skill"), None).expect("wipe compiles");
+    skill_kit::load::learn_from_files(&skill, demo, &Default::default()).expect("learns")
 }
 
 /// The median normal force the generated hand applied over its wipe, from the samples: the
@@ -220,9 +221,9 @@ fn flat_wipes_and_slides_keep_the_planes_one_normal() {
         std::fs::create_dir_all(&dir).expect("temp dir");
         let demo = dir.join(format!("{}.csv", skill.name()));
         std::fs::write(&demo, skill_runtime::demogen::to_csv(&generated)).expect("write");
-        let (_, ir) = skillc::load::load_skill(&root().join(format!("stdlib-skills/{}.skill", skill.name())), None)
+        let (_, ir) = skill_kit::load::load_skill(&root().join(format!("stdlib-skills/{}.skill", skill.name())), None)
             .expect("compiles");
-        let learned = skillc::load::learn_from_files(&ir, &demo, &Default::default()).expect("learns");
+        let learned = skill_kit::load::learn_from_files(&ir, &demo, &Default::default()).expect("learns");
         let (name, frame) = learned.frames.iter().next().expect("a frame");
         let check = &learned.quality.normals[name];
         eprintln!(

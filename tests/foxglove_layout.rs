@@ -7,8 +7,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use serde_json::Value;
-use skillc::ros::msgs::MsgType;
-use skillc::ros::RunLogTopics;
+use skill_ros::bag::RunLogTopics;
+use skill_ros::msgs::MsgType;
 
 fn layout() -> Value {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/foxglove/skillc-run.json");

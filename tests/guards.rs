@@ -15,11 +15,11 @@ fn root() -> PathBuf {
 }
 
 fn learn(file: &str, demo: &str) -> (skill_ir::Skill, Learned) {
-    let Ok((_, ir)) = skillc::load::load_skill(&root().join(file), None) else {
+    let Ok((_, ir)) = skill_kit::load::load_skill(&root().join(file), None) else {
         panic!("{file} compiles")
     };
     let demo = root().join(format!("examples/demos/{demo}.csv"));
-    let Ok(learned) = skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skill_kit::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
         panic!("{file} learns from {}", demo.display())
     };
     (ir, learned)
@@ -27,7 +27,7 @@ fn learn(file: &str, demo: &str) -> (skill_ir::Skill, Learned) {
 
 fn run(skill: &skill_ir::Skill, learned: &Learned, scene: &str, sets: &[&str]) -> (RunReport, RunLog) {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
         panic!("scene loads")
     };
     let bound = bind(skill, learned).expect("binds");
@@ -177,12 +177,12 @@ fn a_speed_guard_fires_at_the_first_tick_past_its_speed() {
 fn a_group_of_states_repeats_as_often_as_an_entered_guard_says() {
     for taps in [3u32, 4] {
         let setting = [format!("taps={taps}")];
-        let Ok((_, skill)) = skillc::load::load_skill_with(&root().join("tests/data/taps.skill"), None, &setting)
+        let Ok((_, skill)) = skill_kit::load::load_skill_with(&root().join("tests/data/taps.skill"), None, &setting)
         else {
             panic!("taps.skill compiles")
         };
         let demo = root().join("examples/demos/double_tap.csv");
-        let Ok(learned) = skillc::load::learn_from_files(&skill, &demo, &LearnOptions::default()) else {
+        let Ok(learned) = skill_kit::load::learn_from_files(&skill, &demo, &LearnOptions::default()) else {
             panic!("learns from the double tap")
         };
         let (report, _) = run(&skill, &learned, "table.toml", &[]);

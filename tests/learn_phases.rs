@@ -14,7 +14,7 @@ use skill_runtime::skill::{learn_skill, LearnError, LearnOptions, Learned, Learn
 
 fn skill(name: &str) -> skill_ir::Skill {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    match skillc::load::load_skill(&root.join(format!("stdlib-skills/{name}.skill")), None) {
+    match skill_kit::load::load_skill(&root.join(format!("stdlib-skills/{name}.skill")), None) {
         Ok((_, ir)) => ir,
         Err(_) => panic!("`{name}` compiles"),
     }
@@ -312,7 +312,7 @@ fn a_task_learns_each_step_from_its_own_phase_of_one_recording() {
     };
     let path = dir.join("task.skill");
     std::fs::write(&path, task([", phase: 1", ", phase: 3"])).expect("write task");
-    let program = skillc::load::load_program_with(&path, &[]).expect("the task compiles");
+    let program = skill_kit::load::load_program_with(&path, &[]).expect("the task compiles");
     let steps = &program.tasks[0].steps;
     assert_eq!(steps.iter().map(|s| s.phase).collect::<Vec<_>>(), [Some(1), Some(3)]);
     // Each step learns its own pass's force: the passes are at different forces, so learning
@@ -322,10 +322,10 @@ fn a_task_learns_each_step_from_its_own_phase_of_one_recording() {
         let skill_ir::StepInput::Demo(demo) = &step.input else {
             panic!("a demonstration step")
         };
-        let learned = skillc::load::learn_from_files(
+        let learned = skill_kit::load::learn_from_files(
             step.skill_in(&program).expect("the skill"),
             std::path::Path::new(demo),
-            &skillc::run_cmd::step_learn_options(step),
+            &skill_kit::load::step_learn_options(step),
         )
         .expect("the step learns");
         let phases = learned.quality.phases.as_ref().expect("phases reported");
@@ -375,7 +375,7 @@ fn a_task_learns_each_step_from_its_own_phase_of_one_recording() {
         (", phase: 2 s", "the contact phase must be a whole number"),
     ] {
         std::fs::write(&path, task([args, ""])).expect("write task");
-        let err = skillc::load::load_program_with(&path, &[]).expect_err("refused");
+        let err = skill_kit::load::load_program_with(&path, &[]).expect_err("refused");
         assert!(format!("{err:?}").contains(expected), "{args}: {err:?}");
     }
     std::fs::write(
@@ -386,7 +386,7 @@ fn a_task_learns_each_step_from_its_own_phase_of_one_recording() {
         ),
     )
     .expect("write task");
-    let err = skillc::load::load_program_with(&path, &[]).expect_err("refused");
+    let err = skill_kit::load::load_program_with(&path, &[]).expect_err("refused");
     assert!(format!("{err:?}").contains("a learned file has none"), "{err:?}");
     // The whole task runs: both steps wipe the table and the run says so.
     std::fs::write(&path, task([", phase: 1", ", phase: 3"])).expect("write task");

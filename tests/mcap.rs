@@ -8,12 +8,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use skill_kit::load::{learn_from_files, load_skill};
+use skill_ros::bag::{read_demo, write_demo, BagOptions, RunLogTopics};
+use skill_ros::msgs::{decode_string, JointState, MsgType, PoseStamped, WrenchStamped};
 use skill_runtime::demo::{parse_csv, ReadOptions, WrenchFrame};
 use skill_runtime::demogen::{generate, to_csv, StdSkill};
 use skill_runtime::skill::LearnOptions;
-use skillc::load::{learn_from_files, load_skill};
-use skillc::ros::msgs::{decode_string, JointState, MsgType, PoseStamped, WrenchStamped};
-use skillc::ros::{read_demo, write_demo, BagOptions, RunLogTopics};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -184,12 +184,16 @@ fn run_writes_its_log_as_mcap_with_one_message_per_tick() {
         assert_eq!(encoding, "cdr", "{topic}");
         match topic {
             RunLogTopics::TF | RunLogTopics::CONTACT_FORCE => {
-                assert_eq!(payloads.len(), ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS), "{topic}")
+                assert_eq!(
+                    payloads.len(),
+                    ticks.div_ceil(skill_ros::bag::TF_PERIOD_TICKS),
+                    "{topic}"
+                )
             }
             RunLogTopics::TF_STATIC | RunLogTopics::ROBOT_DESCRIPTION => assert_eq!(payloads.len(), 1, "{topic}"),
             // Once at the start, then again whenever the button's cap moved (at most at /tf's rate).
             RunLogTopics::SCENE => assert!(
-                (1..=ticks.div_ceil(skillc::ros::TF_PERIOD_TICKS)).contains(&payloads.len()),
+                (1..=ticks.div_ceil(skill_ros::bag::TF_PERIOD_TICKS)).contains(&payloads.len()),
                 "{topic}: {} messages",
                 payloads.len()
             ),
@@ -396,7 +400,7 @@ fn pose_message(k: usize) -> PoseStamped {
         orientation_xyzw: [0.0, 1.0, 0.0, 0.0],
         ..PoseStamped::default()
     };
-    pose.header.stamp = skillc::ros::msgs::Time::from_seconds(k as f64 * 1e-3);
+    pose.header.stamp = skill_ros::msgs::Time::from_seconds(k as f64 * 1e-3);
     pose.header.frame_id = "base".into();
     pose
 }
@@ -406,7 +410,7 @@ fn wrench_message(k: usize) -> WrenchStamped {
         force: [0.0, 0.0, k as f64 * 0.01],
         ..WrenchStamped::default()
     };
-    wrench.header.stamp = skillc::ros::msgs::Time::from_seconds(k as f64 * 1e-3);
+    wrench.header.stamp = skill_ros::msgs::Time::from_seconds(k as f64 * 1e-3);
     wrench
 }
 
@@ -538,8 +542,8 @@ fn run_logged_as_mcap(dir: &Path, skill: &str, scene: &str) -> Vec<u8> {
 /// rosbag2 marks them.
 #[test]
 fn a_run_log_carries_transforms_and_the_robot_for_a_3d_view() {
-    use skillc::ros::msgs::{decode_markers, decode_tf, marker_action, marker_type, Marker};
-    use skillc::ros::{FORCE_ARROW_MIN_N, FORCE_ARROW_M_PER_N};
+    use skill_ros::bag::{FORCE_ARROW_MIN_N, FORCE_ARROW_M_PER_N};
+    use skill_ros::msgs::{decode_markers, decode_tf, marker_action, marker_type, Marker};
     let dir = temp_dir("tf");
     let bytes = run_logged_as_mcap(&dir, "touch", "table");
     let mut first_topic = None;
@@ -708,13 +712,13 @@ fn a_run_log_written_in_batches_is_the_log_written_whole() {
             }
         }
     }
-    let scene = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
+    let scene = skill_kit::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
     let objects = &scene.spec().objects;
     let names: Vec<String> = (1..=7).map(|j| format!("j{j}")).collect();
     let logs = [(None, &first), (Some("press"), &second)];
-    let whole = skillc::ros::write_run_log(&logs, &names, None, objects).expect("written whole");
+    let whole = skill_ros::bag::write_run_log(&logs, &names, None, objects).expect("written whole");
     for batch in [1, 7, 30, 1000] {
-        let mut writer = skillc::ros::RunLogWriter::new(&names, None, objects);
+        let mut writer = skill_ros::bag::RunLogWriter::new(&names, None, objects);
         for (step, log) in &logs {
             writer.start_log(step.map(str::to_owned));
             for (chunk, ticks) in log.ticks.chunks(batch).enumerate() {
@@ -756,7 +760,7 @@ fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
         &LearnOptions::default(),
     )
     .expect("learns");
-    let scene = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
+    let scene = skill_kit::load::load_scene(&root().join("examples/scenes/button.toml"), &[]).expect("scene");
     let bound = skill_runtime::exec::bind(&skill, &learned).expect("binds");
     let dir = temp_dir("live");
     for ext in ["csv", "mcap"] {
@@ -798,7 +802,7 @@ fn a_log_written_while_the_run_goes_on_is_the_log_written_after_it() {
 /// and `/wrench` pushes the tool up by more than the spring's preload.
 #[test]
 fn a_pressed_buttons_cap_moves_on_scene_under_the_probe() {
-    use skillc::ros::msgs::{decode_markers, marker_type, Marker};
+    use skill_ros::msgs::{decode_markers, marker_type, Marker};
     let dir = temp_dir("cap");
     let bytes = run_logged_as_mcap(&dir, "press", "button");
     let mut scenes: Vec<(u64, Vec<Marker>)> = Vec::new();

@@ -55,7 +55,7 @@ const TOKENS: &[&str] = &[
 ];
 
 fn compile_bytes(bytes: Vec<u8>) {
-    match skillc::frontend::decode("fuzz.skill", bytes) {
+    match skill_kit::frontend::decode("fuzz.skill", bytes) {
         Ok(source) => {
             let compilation = skill_compiler::compile(source, &mut |_| {
                 Err(skill_compiler::LoadError {
@@ -71,7 +71,7 @@ fn compile_bytes(bytes: Vec<u8>) {
                     assert!(label.span.start <= label.span.end && label.span.end <= len, "{diag:?}");
                 }
             }
-            let _ = skillc::render::all_plain(&compilation, 80);
+            let _ = skill_kit::render::all_plain(&compilation, 80);
         }
         Err(invalid) => assert_eq!(invalid.1.code, Code::InvalidUtf8),
     }
@@ -126,7 +126,7 @@ fn ten_megabytes_of_anything_get_one_diagnostic() {
 fn binary_input_is_reported_as_invalid_utf8_at_the_first_bad_byte() {
     let mut bytes = b"skill s {".to_vec();
     bytes.extend([0u8, 0xff, 0xfe, 0x00, 0x80]);
-    let Err(invalid) = skillc::frontend::decode("bin.skill", bytes) else {
+    let Err(invalid) = skill_kit::frontend::decode("bin.skill", bytes) else {
         panic!("binary is not UTF-8")
     };
     let (source, diag) = *invalid;

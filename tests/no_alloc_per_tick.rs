@@ -102,10 +102,10 @@ struct Ticks {
 
 /// Runs the slide at `speed` and counts its allocations tick by tick.
 fn slide_ticks(speed: f64) -> Ticks {
-    let Ok((_, skill)) = skillc::load::load_skill(&root().join("stdlib-skills/slide.skill"), None) else {
+    let Ok((_, skill)) = skill_kit::load::load_skill(&root().join("stdlib-skills/slide.skill"), None) else {
         panic!("slide compiles")
     };
-    let Ok(learned) = skillc::load::learn_from_files(
+    let Ok(learned) = skill_kit::load::learn_from_files(
         &skill,
         &root().join("examples/demos/slide.csv"),
         &LearnOptions::default(),
@@ -113,7 +113,7 @@ fn slide_ticks(speed: f64) -> Ticks {
         panic!("slide learns")
     };
     let bound = bind(&skill, &learned).expect("binds");
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &[]) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/table.toml"), &[]) else {
         panic!("scene")
     };
     let plant = RapierPlant::from_scene(&scene).expect("plant");

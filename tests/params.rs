@@ -16,7 +16,7 @@ fn root() -> PathBuf {
 
 fn skill(params: &[&str]) -> skill_ir::Skill {
     let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-    match skillc::load::load_skill_with(&root().join(FILE), None, &params) {
+    match skill_kit::load::load_skill_with(&root().join(FILE), None, &params) {
         Ok((_, skill)) => skill,
         Err(_) => panic!("{FILE} compiles with {params:?}"),
     }
@@ -24,14 +24,14 @@ fn skill(params: &[&str]) -> skill_ir::Skill {
 
 fn learn(skill: &skill_ir::Skill) -> Learned {
     let demo = root().join("examples/demos/touch.csv");
-    let Ok(learned) = skillc::load::learn_from_files(skill, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skill_kit::load::learn_from_files(skill, &demo, &LearnOptions::default()) else {
         panic!("learns from {}", demo.display())
     };
     learned
 }
 
 fn scene() -> skill_runtime::sim::Scene {
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &[]) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/table.toml"), &[]) else {
         panic!("scene loads")
     };
     scene
@@ -80,7 +80,7 @@ fn the_hold_lasts_the_default_then_what_the_command_line_sets_with_the_same_lear
 
 #[test]
 fn each_task_step_runs_the_skill_with_its_own_values() {
-    let compilation = skillc::frontend::compile_path(&root().join(FILE)).expect("reads");
+    let compilation = skill_kit::frontend::compile_path(&root().join(FILE)).expect("reads");
     let program = compilation.program.expect("compiles");
     let task = &program.tasks[0];
     assert!(task.steps[0].specialised.is_none(), "the first step sets nothing");
@@ -156,7 +156,7 @@ fn bad_settings_are_refused_naming_the_setting() {
 #[test]
 fn a_count_set_in_exponent_form_is_a_whole_number() {
     let file = root().join("compiler/tests/corpus/ok/params.skill");
-    let compiled = |value: &str| skillc::load::load_program_with(&file, &[format!("presses={value}")]);
+    let compiled = |value: &str| skill_kit::load::load_program_with(&file, &[format!("presses={value}")]);
     for (value, repeat) in [("1e3", 1000), ("3.0", 3), ("2", 2)] {
         let Ok(program) = compiled(value) else {
             panic!("presses={value} compiles")
@@ -176,7 +176,7 @@ fn a_count_set_in_exponent_form_is_a_whole_number() {
         assert!(found.contains(&repeat), "presses={value}: repeats {found:?}");
     }
     for value in ["2.5", "-1", "1e4"] {
-        let Err(skillc::load::Failure::Input(message)) = compiled(value) else {
+        let Err(skill_kit::load::Failure::Input(message)) = compiled(value) else {
             panic!("presses={value} is refused")
         };
         assert!(

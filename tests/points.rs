@@ -14,11 +14,11 @@ fn root() -> PathBuf {
 
 #[test]
 fn the_peak_within_a_segment_is_the_slides_and_the_peak_overall_the_press() {
-    let Ok((_, skill)) = skillc::load::load_skill(&root().join("tests/data/peak_points.skill"), None) else {
+    let Ok((_, skill)) = skill_kit::load::load_skill(&root().join("tests/data/peak_points.skill"), None) else {
         panic!("the skill compiles")
     };
     let demo = root().join("examples/demos/slide_then_press.csv");
-    let Ok(learned) = skillc::load::learn_from_files(&skill, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skill_kit::load::learn_from_files(&skill, &demo, &LearnOptions::default()) else {
         panic!("learns")
     };
     let slide = learned.forces["slide_peak"].value_n().expect("a constant force");

@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
+use skill_eval::metrics::{measure, ContactPlan, Metrics};
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog, RunReport};
 use skill_runtime::skill::{LearnOptions, Learned};
-use skillc::eval::metrics::{measure, ContactPlan, Metrics};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -15,10 +15,10 @@ fn root() -> PathBuf {
 fn learned(skill: &str) -> (skill_ir::Skill, Learned) {
     let file = root().join(format!("stdlib-skills/{skill}.skill"));
     let demo = root().join(format!("examples/demos/{skill}.csv"));
-    let Ok((_, ir)) = skillc::load::load_skill(&file, None) else {
+    let Ok((_, ir)) = skill_kit::load::load_skill(&file, None) else {
         panic!("{skill} compiles")
     };
-    let Ok(learned) = skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skill_kit::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
         panic!("{skill} learns from its demonstration")
     };
     (ir, learned)
@@ -32,7 +32,7 @@ fn run(
     replay: bool,
 ) -> (RunReport, RunLog, Metrics) {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes").join(scene), &sets) else {
         panic!("scene loads")
     };
     let bound = bind(skill, learned).expect("binds");
@@ -211,7 +211,7 @@ fn the_contours_frame_follows_the_moved_drums_normal() {
     // The drum's axis runs along the base y through (x, z) = (0.5666, 0.15).
     let (axis_x, axis_z) = (0.5666, 0.15);
     let (report, log, _) = run(&skill, &learned, "cylinder.toml", &["drum.x=0.5666"], false);
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/cylinder.toml"), &[]) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/cylinder.toml"), &[]) else {
         panic!("scene loads")
     };
     let stiffness = scene.spec().sim.contact_stiffness;
@@ -298,7 +298,7 @@ fn the_example_task_runs_end_to_end() {
 #[test]
 fn a_crossed_limit_is_a_reflex_that_names_the_state_line_quantity_and_values() {
     let (skill, learned) = learned("press");
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/button.toml"), &[]) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/button.toml"), &[]) else {
         panic!("scene loads")
     };
     let bound = bind(&skill, &learned).expect("binds");
@@ -337,7 +337,7 @@ fn a_crossed_limit_is_a_reflex_that_names_the_state_line_quantity_and_values() {
 #[test]
 fn a_tool_starting_inside_an_object_is_refused_with_the_object_named() {
     let (skill, learned) = learned("touch");
-    let Ok(scene) = skillc::load::load_scene(
+    let Ok(scene) = skill_kit::load::load_scene(
         &root().join("examples/scenes/table.toml"),
         // The top 2.9 cm above the tip's lowest point (the scene starts the tip 6.1 cm above it).
         &["table.z=0.355".to_string()],
@@ -449,11 +449,11 @@ fn a_repeated_motion_replays_its_per_sample_frames_with_each_run() {
     std::fs::create_dir_all(&dir).expect("folder");
     let file = dir.join("contour_twice.skill");
     std::fs::write(&file, CONTOUR_TWICE).expect("written");
-    let Ok((_, skill)) = skillc::load::load_skill(&file, None) else {
+    let Ok((_, skill)) = skill_kit::load::load_skill(&file, None) else {
         panic!("compiles")
     };
     let demo = root().join("examples/demos/contour.csv");
-    let learned = skillc::load::learn_from_files(&skill, &demo, &LearnOptions::default()).expect("learns");
+    let learned = skill_kit::load::learn_from_files(&skill, &demo, &LearnOptions::default()).expect("learns");
     // The table far below: the arc runs in the air.
     let (report, log, _) = run(&skill, &learned, "table.toml", &["table.z=-0.5"], false);
     assert_eq!(report.outcome, skill_ir::Outcome::Success, "{}", report.message);

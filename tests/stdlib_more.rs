@@ -7,11 +7,11 @@
 use std::path::PathBuf;
 
 use nalgebra::Vector3;
+use skill_eval::metrics::{measure, ContactPlan, Metrics};
+use skill_kit::profile::DesiredProfile;
 use skill_runtime::demogen::GroundTruth;
 use skill_runtime::exec::{bind, simulate, ExecOptions, Mode, RunLog, RunReport};
 use skill_runtime::skill::{LearnOptions, Learned};
-use skillc::eval::metrics::{measure, ContactPlan, Metrics};
-use skillc::profile::DesiredProfile;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -25,10 +25,10 @@ fn truth(skill: &str) -> GroundTruth {
 fn learned(skill: &str) -> (skill_ir::Skill, Learned) {
     let file = root().join(format!("stdlib-skills/{skill}.skill"));
     let demo = root().join(format!("examples/demos/{skill}.csv"));
-    let Ok((_, ir)) = skillc::load::load_skill(&file, None) else {
+    let Ok((_, ir)) = skill_kit::load::load_skill(&file, None) else {
         panic!("{skill} compiles")
     };
-    let Ok(learned) = skillc::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
+    let Ok(learned) = skill_kit::load::learn_from_files(&ir, &demo, &LearnOptions::default()) else {
         panic!("{skill} learns from its demonstration")
     };
     (ir, learned)
@@ -38,7 +38,7 @@ fn learned(skill: &str) -> (skill_ir::Skill, Learned) {
 /// pre-positioning), with the eval's metrics.
 fn run(skill: &skill_ir::Skill, learned: &Learned, sets: &[&str]) -> (RunReport, RunLog, Metrics) {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let Ok(scene) = skillc::load::load_scene(&root().join("examples/scenes/table.toml"), &sets) else {
+    let Ok(scene) = skill_kit::load::load_scene(&root().join("examples/scenes/table.toml"), &sets) else {
         panic!("scene loads")
     };
     let bound = bind(skill, learned).expect("binds");

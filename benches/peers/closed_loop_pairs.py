@@ -8,7 +8,7 @@ medians of the absolute times only say how loaded the host was.
 
 Run from the repository root after `cargo build --release`, with MuJoCo in a venv outside the
 repository:
-    /tmp/venv-mj/bin/python bench/peers/closed_loop_pairs.py [ROUNDS]
+    /tmp/venv-mj/bin/python benches/peers/closed_loop_pairs.py [ROUNDS]
 """
 
 import os

@@ -3,7 +3,7 @@
 Each round times every peer once (after a warm-up call) and then runs the matching criterion
 benchmarks of skillc (short measurement, their median read from target/criterion); the table
 gives the median over the rounds. Run from the repository root with the peers' venv:
-    OPENBLAS_NUM_THREADS=1 /tmp/peers-venv/bin/python bench/peers/compare.py [ROUNDS]
+    OPENBLAS_NUM_THREADS=1 /tmp/peers-venv/bin/python benches/peers/compare.py [ROUNDS]
 """
 
 import json

@@ -1,4 +1,4 @@
-"""The benchmark data of runtime/benches/, generated exactly as the Rust benches do."""
+"""The benchmark data of benches/, generated exactly as the Rust benches do."""
 
 import numpy as np
 

@@ -11,7 +11,7 @@ effective masses at the suite's start (0.345 kg along x, 3.7 kg along z, from
 Figures printed, per case: the tip's x where the contact (off_the_end: any force; step_down: the
 edge's horizontal push) is lost, and the mean force on the flat at x in [0.53, 0.55] m.
 Run with a venv outside the repository:
-    /tmp/venv/bin/python bench/peers/mujoco_edge_step.py
+    /tmp/venv/bin/python benches/peers/mujoco_edge_step.py
 """
 
 import mujoco

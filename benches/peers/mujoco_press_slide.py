@@ -7,7 +7,7 @@ Times, per step (median of ROUNDS runs, after a warm-up run):
     (Jacobian from mj_jacSite, gravity/Coriolis from qfrc_bias), write ctrl, mj_step;
   - the engine alone: mj_step with the same controls replayed (no Python law).
 Run with a venv outside the repository:
-    /tmp/venv-mj/bin/python bench/peers/mujoco_press_slide.py [ROUNDS]
+    /tmp/venv-mj/bin/python benches/peers/mujoco_press_slide.py [ROUNDS]
 """
 
 import statistics

@@ -17,7 +17,7 @@ It checks, against the plant at ENDPOINT on DOMAIN:
 
 Usage (in a venv with eclipse-zenoh, rosbags and xxhash; never needed by the build or the tests):
     skillc plant --scene examples/scenes/table.toml --listen tcp/127.0.0.1:7447 &
-    python bench/peers/zenoh_ros2_peer.py tcp/127.0.0.1:7447 [DOMAIN]
+    python benches/peers/zenoh_ros2_peer.py tcp/127.0.0.1:7447 [DOMAIN]
 Exits 0 when every check holds, 1 with the failed check otherwise.
 """
 

@@ -597,7 +597,7 @@ fn witness_figures(trace: &[(Vector3<f64>, Vector3<f64>)], horizontal: bool) -> 
     (lost, flat.iter().sum::<f64>() / flat.len().max(1) as f64)
 }
 
-/// The cases `bench/peers/mujoco_edge_step.py` runs in MuJoCo, frictionless: the figures it
+/// The cases `benches/peers/mujoco_edge_step.py` runs in MuJoCo, frictionless: the figures it
 /// compares (benches/README.md has the table). Geometry alone bounds them here: the tip leaves
 /// the table's end between the edge and a radius past it, the step's edge before the tip is over
 /// the lower top by a radius, and the flat carries the impedance's 10 N within 5 %.

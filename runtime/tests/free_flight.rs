@@ -1,4 +1,4 @@
-//! Free flight against rapier (`sim/src/sim/free_flight.rs`): the steps the plant integrates
+//! Free flight against rapier (`runtime/sim/src/free_flight.rs`): the steps the plant integrates
 //! itself from the robot model move the arm as rapier's own steps do, the plant takes them far
 //! from everything and never in contact, near a joint limit or in a scene with a moving object,
 //! the handover into contact gives rapier's first contact force, and the wrist sensor reads in

@@ -6,8 +6,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// Every workspace crate of the runtime, by folder.
-const CRATES: [(&str, &str); 8] = [
+/// Every workspace crate of the runtime, and the tools on top of it, by folder.
+const CRATES: [(&str, &str); 12] = [
     ("skill-robot", "runtime/robot"),
     ("skill-model", "runtime/model"),
     ("skill-learn", "runtime/learn"),
@@ -16,9 +16,15 @@ const CRATES: [(&str, &str); 8] = [
     ("skill-runtime", "runtime"),
     ("skill-ros", "runtime/ros"),
     ("skill-transport", "runtime/transport"),
+    ("skill-compiler", "compiler"),
+    ("skill-language-server", "language-server"),
+    ("skill-kit", "kit"),
+    ("skill-eval", "eval"),
 ];
 
-/// Each crate's normal (not dev) dependencies, by name.
+/// Each crate's normal (not dev) dependencies, by name. Optional ones count only where a feature
+/// of the crate's own turns them on by default; [`the_plant_link_leaves_the_bag_code_out`]
+/// checks who turns on the ROS 2 crate's bag code.
 fn manifests() -> BTreeMap<String, BTreeSet<String>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     CRATES
@@ -32,7 +38,13 @@ fn manifests() -> BTreeMap<String, BTreeSet<String>> {
             let deps = manifest
                 .get("dependencies")
                 .and_then(toml::Value::as_table)
-                .map(|table| table.keys().cloned().collect())
+                .map(|table| {
+                    table
+                        .iter()
+                        .filter(|(_, spec)| spec.get("optional").and_then(toml::Value::as_bool) != Some(true))
+                        .map(|(dep, _)| dep.clone())
+                        .collect()
+                })
                 .unwrap_or_default();
             (name.to_string(), deps)
         })
@@ -103,4 +115,53 @@ fn the_controller_links_neither_simulator_nor_learner_and_the_plant_no_learner()
     for needed in ["skill-sim", "skill-exec", "skill-learn"] {
         assert!(runtime.contains(needed), "{runtime:?}");
     }
+}
+
+/// Reads a manifest of the workspace by folder.
+fn manifest(folder: &str) -> toml::Table {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(folder)
+        .join("Cargo.toml");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+    toml::from_str(&text).unwrap_or_else(|err| panic!("{}: {err}", path.display()))
+}
+
+#[test]
+fn the_plant_link_leaves_the_bag_code_out() {
+    // skill-ros's bag code (its `mcap` feature) links the learner, the controller and the
+    // simulator; the plant's link must take the messages alone.
+    let ros = manifest("runtime/ros");
+    let bag = ros["features"]["mcap"]
+        .as_array()
+        .expect("skill-ros has an `mcap` feature");
+    assert!(bag.iter().any(|dep| dep.as_str() == Some("dep:skill-learn")), "{bag:?}");
+    assert!(
+        ros["features"].get("default").is_none(),
+        "skill-ros turns nothing on by default"
+    );
+    let transport = manifest("runtime/transport");
+    let spec = &transport["dependencies"]["skill-ros"];
+    assert!(
+        spec.get("features").is_none(),
+        "skill-transport turns on skill-ros features: {spec:?}"
+    );
+}
+
+#[test]
+fn the_language_server_links_the_compiler_alone() {
+    let manifests = manifests();
+    let server = links(&manifests, "skill-language-server");
+    assert!(server.contains("skill-compiler"), "{server:?}");
+    for banned in ["skill-runtime", "skill-kit", "skill-eval", "rapier3d", "skill-ros"] {
+        assert!(
+            !server.contains(banned),
+            "skill-language-server links {banned}: {server:?}"
+        );
+    }
+    let kit = links(&manifests, "skill-kit");
+    assert!(
+        !kit.contains("skill-eval"),
+        "skill-kit is below the eval harness: {kit:?}"
+    );
 }

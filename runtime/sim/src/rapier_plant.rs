@@ -113,7 +113,7 @@ pub struct StepCounts {
 /// base, as a real arm's joint elasticity seen at a point nearer the base is. Cost: each arm
 /// link is one (compound) collider, since a step updates every moving collider: about 0.9 µs a
 /// step in free motion (18.0 vs 17.1 µs, 5 %) and within noise pressing on the table
-/// (`runtime/benches/robot_sim.rs` has both); one collider per shape cost about 3 µs.
+/// (`benches/robot_sim.rs` has both); one collider per shape cost about 3 µs.
 /// Contacts are found anew every step (rapier's contact recycling is off): no force while the
 /// tool is more than 1 mm from every object. The same `m ω²` holds for the tool: the scene's
 /// stiffness is exact along the base z at the start; along another normal it scales with the

@@ -35,8 +35,8 @@ use nalgebra::Vector3;
 use skill_ir as ir;
 
 use super::CONTACT_N;
-use crate::demo::Demo;
 use crate::constraint::{fit_constraints, ConstraintConfig, ConstraintKind};
+use crate::demo::Demo;
 use crate::segment::Segment;
 use crate::skill::learned::ContactBoundaries;
 

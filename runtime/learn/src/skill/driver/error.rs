@@ -1,8 +1,8 @@
 //! Why a skill could not be learned from a demonstration: the driver's one error type.
 
+use crate::constraint::ConstraintError;
 use crate::demo::DemoError;
 use crate::dmp::DmpError;
-use crate::constraint::ConstraintError;
 use crate::force::ForceError;
 use crate::segment::SegmentError;
 

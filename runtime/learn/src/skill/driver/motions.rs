@@ -9,8 +9,8 @@ use super::smoothing::{smooth_points, smoothing_window};
 use super::{LearnError, Learner};
 use crate::demo::Smoothing;
 use crate::dmp::{Dmp, DmpConfig, QuatDmp};
-use crate::strokes::find_strokes;
 use crate::skill::learned::{LearnedMotion, MotionQuality};
+use crate::strokes::find_strokes;
 
 /// Reconstruction error (3-D RMS) above which `learn` warns \[m\]. A 50-basis fit of a smooth
 /// hand-guided segment reconstructs to a few hundredths of a millimetre; a millimetre means

@@ -555,9 +555,17 @@ pub fn merge(parts: Vec<(String, SweepSummary)>) -> Result<Merged, String> {
         merged.elapsed_s += part.elapsed_s;
         merged.trials.extend(part.trials);
     }
-    merged
-        .trials
-        .sort_by(|a, b| (a.skill.as_str(), a.draw.map(|d| d.index)).cmp(&(b.skill.as_str(), b.draw.map(|d| d.index))));
+    // The order one process gives: each trial at its global index in the draw sequence (the
+    // skills in the trials file's order, each skill's draws in index order), not by skill name.
+    // (`check` admitted only draws of the identity's skills, each with its draw.)
+    if let Some(identity) = &merged.identity {
+        merged.trials.sort_by_cached_key(|trial| {
+            (
+                identity.skills.iter().position(|skill| *skill == trial.skill),
+                trial.draw.map(|d| d.index),
+            )
+        });
+    }
     let total = merged.identity.as_ref().map_or(1, |identity| identity.shares);
     let missing: Vec<String> = (1..=total)
         .filter(|k| !shares_seen.contains_key(k))
@@ -634,6 +642,96 @@ mod tests {
             assert!(parse_partition(bad).is_err(), "{bad}");
         }
         assert!(parse_draws("0").is_err() && parse_draws("1000000").is_err() && parse_draws("-1").is_err());
+    }
+
+    /// A synthetic sweep of two skills (the trials file's order not alphabetical), its trials'
+    /// numbers drawn at random with up to 17 significant digits (plus 0.1 + 0.2 and 1/3), as
+    /// one process writes it and as M shares written, read back and merged.
+    fn synthetic_sweep(shares: usize) -> (SweepSummary, Vec<SweepSummary>) {
+        let skills = ["touch".to_string(), "press".to_string()];
+        let per_skill = 4;
+        let ranges = SweepRanges::default();
+        let mut rng = SplitMix64::new(11);
+        let mut trials = Vec::new();
+        for skill in &skills {
+            for index in 0..per_skill {
+                let mut trial =
+                    crate::Outcome::error(skill, &format!("draw #{index}"), "skill", Vec::new(), String::new()).result;
+                let mut number = || rng.range(-1.0, 1.0) * 10f64.powi(rng.range(-6.0, 6.0) as i32);
+                trial.force_rms_rel = Some(0.1 + 0.2);
+                trial.contact_share = Some(1.0 / 3.0);
+                trial.peak_force_n = number();
+                trial.goal_error_m = number();
+                trial.duration_s = number();
+                trial.peak_tool_speed_mps = number();
+                trial.min_joint_margin_rad = number();
+                trial.torque_limit_s = number();
+                let mut d = draw(&ranges, 3, skill, index);
+                d.start_raised_m = number();
+                trial.draw = Some(d);
+                trials.push(trial);
+            }
+        }
+        let summary = |partition: Partition, trials: Vec<TrialResult>| SweepSummary {
+            format_version: crate::SUMMARY_VERSION,
+            kind: "sweep".to_string(),
+            seed: 3,
+            per_skill,
+            partitions: vec![partition.to_string()],
+            ranges: skills.iter().map(|skill| (skill.clone(), ranges)).collect(),
+            identity: Some(SweepIdentity {
+                skillc_version: "test".to_string(),
+                inputs: "inputs".to_string(),
+                skills: skills.to_vec(),
+                shares: partition.m,
+            }),
+            elapsed_s: 0.0,
+            trials,
+        };
+        let whole = summary(Partition::ALL, trials.clone());
+        // Each share as `eval --partition K/M` writes it (`fill`) and `eval merge` reads it,
+        // given to the merge last share first.
+        let parts = (1..=shares)
+            .rev()
+            .map(|k| {
+                let partition = Partition { k, m: shares };
+                let mine = trials
+                    .iter()
+                    .enumerate()
+                    .filter(|(global, _)| partition.runs(*global))
+                    .map(|(_, trial)| trial.clone())
+                    .collect();
+                let text = serde_json::to_string_pretty(&summary(partition, mine)).expect("serialises") + "\n";
+                serde_json::from_str(&text).expect("reads back")
+            })
+            .collect();
+        (whole, parts)
+    }
+
+    #[test]
+    fn merged_shares_write_the_bytes_one_process_writes() {
+        let (whole, parts) = synthetic_sweep(3);
+        let named = parts
+            .into_iter()
+            .enumerate()
+            .map(|(i, part)| (format!("share{i}"), part))
+            .collect();
+        let mut merged = merge(named).expect("the shares belong together");
+        assert!(merged.missing.is_empty());
+        assert_eq!(merged.summary.partitions, ["1/3", "2/3", "3/3"]);
+        // What differs by design: the shares named and the number of shares (timing is 0 here).
+        merged.summary.partitions = whole.partitions.clone();
+        if let Some(identity) = &mut merged.summary.identity {
+            identity.shares = 1;
+        }
+        let text = |summary: &SweepSummary| serde_json::to_string_pretty(summary).expect("serialises");
+        let (one, joined) = (text(&whole), text(&merged.summary));
+        // Line by line first, for a readable failure.
+        for (a, b) in one.lines().zip(joined.lines()) {
+            assert_eq!(a, b, "the merge changed a line of summary.json");
+        }
+        assert_eq!(one, joined);
+        assert_eq!(table(&whole), table(&merged.summary));
     }
 
     #[test]

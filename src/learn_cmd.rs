@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use skill_runtime::demo::{Dialect, ForceSign, WrenchDeclaration, WrenchFrame, COLUMNS};
 use skill_runtime::exec::bind;
@@ -89,7 +89,7 @@ pub struct LearnArgs {
     /// The contact phase to learn from (1, 2, ...), when the demonstration has several (a part
     /// wiped three times with lift-offs between): default, the whole demonstration, or the
     /// longest phase when the template expects one contact (said so).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_phase, allow_negative_numbers = true)]
     pub phase: Option<usize>,
     /// Also draw what was learned into this folder (SVG): the demonstration against the
     /// rollout with segments and frames, forces in the world and compliant frames.
@@ -240,16 +240,10 @@ fn learn(args: &LearnArgs) -> Result<(String, Vec<String>), Failure> {
     };
     let (learned, provenance) = learn_from_source(&skill, &args.demo, &dialect, &bag, &options, args.applied_force)?;
     let json = serde_json::to_string_pretty(&learned).map_err(|err| Failure::Usage(err.to_string()))? + "\n";
-    atomic::write(&args.output, json.as_bytes())
-        .map_err(|err| Failure::Usage(format!("cannot write `{}`: {err}", args.output.display())))?;
-    let mut out = summary(&learned);
-    if let Some(provenance) = provenance {
-        out = out.replacen('\n', &format!("\n  {provenance}\n"), 1);
-    }
-    let _ = writeln!(out, "wrote `{}`", args.output.display());
+    // The plots are drawn in memory first; then every file is written, and on any failure the
+    // ones this command created are removed: nothing new is left behind.
+    let mut plots = Vec::new();
     if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir)
-            .map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
         let bound = bind(&skill, &learned).map_err(|err| Failure::Input(err.to_string()))?;
         let subject = Subject {
             name: &learned.skill,
@@ -257,13 +251,59 @@ fn learn(args: &LearnArgs) -> Result<(String, Vec<String>), Failure> {
             bound: Some(&bound),
         };
         for kind in [Plot::Trajectory, Plot::LearnedForce] {
-            let path = dir.join(format!("{}_{}.svg", learned.skill, kind.name()));
-            plot::draw(kind, &path, &subject, &[])
+            let svg = plot::render(kind, &subject, &[])
                 .map_err(|err| Failure::Usage(format!("cannot plot `{}`: {err}", kind.name())))?;
-            let _ = writeln!(out, "wrote `{}`", path.display());
+            plots.push((dir.join(format!("{}_{}.svg", learned.skill, kind.name())), svg));
         }
     }
+    // The learned file last: it replaces an earlier one only once every plot is written.
+    let mut files: Vec<(&Path, &[u8])> = plots
+        .iter()
+        .map(|(path, svg)| (path.as_path(), svg.as_bytes()))
+        .collect();
+    files.push((args.output.as_path(), json.as_bytes()));
+    write_all_or_none(&files, args.plot.as_deref())?;
+    let mut out = summary(&learned);
+    if let Some(provenance) = provenance {
+        out = out.replacen('\n', &format!("\n  {provenance}\n"), 1);
+    }
+    let _ = writeln!(out, "wrote `{}`", args.output.display());
+    for (path, _) in &plots {
+        let _ = writeln!(out, "wrote `{}`", path.display());
+    }
     Ok((out, learned.demo.warnings))
+}
+
+/// Writes each of `files` (each atomically), creating the folder `plot_dir` if it is missing; on
+/// any failure, removes the files written and the folder created here, so a failed command
+/// leaves nothing new behind. (A file that existed before and was already replaced stays
+/// replaced: its old content is gone once the rename is done.)
+fn write_all_or_none(files: &[(&Path, &[u8])], plot_dir: Option<&Path>) -> Result<(), Failure> {
+    let created_dir = match plot_dir {
+        Some(dir) if !dir.exists() => {
+            std::fs::create_dir_all(dir)
+                .map_err(|err| Failure::Usage(format!("cannot create `{}`: {err}", dir.display())))?;
+            Some(dir)
+        }
+        _ => None,
+    };
+    let mut written: Vec<&Path> = Vec::new();
+    for (path, bytes) in files {
+        let existed = path.exists();
+        if let Err(err) = atomic::write(path, bytes) {
+            for done in &written {
+                let _ = std::fs::remove_file(done);
+            }
+            if let Some(dir) = created_dir {
+                let _ = std::fs::remove_dir(dir);
+            }
+            return Err(Failure::Usage(format!("cannot write `{}`: {err}", path.display())));
+        }
+        if !existed {
+            written.push(path);
+        }
+    }
+    Ok(())
 }
 
 /// A short human summary of what was learned.
@@ -809,4 +849,15 @@ pub fn contact_line(contact: &skill_runtime::skill::ContactBoundaries) -> String
         line.push_str(&format!(" ({kept})"));
     }
     line
+}
+
+/// Parses `--phase N`: contact phases count from 1, and no demonstration holds more than
+/// [`skill_kit::limits::SEGMENTS`] of them.
+fn parse_phase(text: &str) -> Result<usize, String> {
+    let max = skill_kit::limits::SEGMENTS;
+    match text.trim().parse::<i64>() {
+        Ok(phase) if (1..=i64::from(max)).contains(&phase) => Ok(phase as usize),
+        Ok(_) => Err(format!("contact phases count from 1 to at most {max}")),
+        Err(_) => Err("a contact phase is a whole number, 1 for the first".to_string()),
+    }
 }

@@ -26,7 +26,7 @@ pub struct PlantArgs {
     #[arg(long, value_name = "tcp/HOST:PORT")]
     pub listen: String,
     /// The ROS domain (0-232), as `ROS_DOMAIN_ID` sets it for ROS 2 tools.
-    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232))]
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232), allow_negative_numbers = true)]
     pub domain: u32,
     /// Stay at normal priority instead of taking SCHED_FIFO, e.g. on a machine shared with work
     /// that must not wait behind the plant; realtime runs then get more late commands (lockstep
@@ -43,7 +43,7 @@ pub struct LinkArgs {
     #[arg(long, value_name = "tcp/HOST:PORT")]
     pub plant: Option<String>,
     /// The ROS domain of --plant (0-232).
-    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232), requires = "plant")]
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232), allow_negative_numbers = true, requires = "plant")]
     pub domain: u32,
     /// With --plant: the plant steps once per command, so the run computes exactly what it
     /// computes in one process (the default).

@@ -477,6 +477,16 @@ pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) 
     Ok(value)
 }
 
+/// A 64-bit FNV-1a hash of `bytes`, in hex.
+pub fn fnv(bytes: &[u8]) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for byte in bytes {
+        hash ^= u64::from(*byte);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{hash:016x}")
+}
+
 #[cfg(test)]
 mod tests {
     use std::path::PathBuf;
@@ -675,14 +685,4 @@ mod tests {
         );
         std::fs::remove_dir_all(&root).expect("clean up");
     }
-}
-
-/// A 64-bit FNV-1a hash of `bytes`, in hex.
-pub fn fnv(bytes: &[u8]) -> String {
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
-    for byte in bytes {
-        hash ^= u64::from(*byte);
-        hash = hash.wrapping_mul(0x0100_0000_01b3);
-    }
-    format!("{hash:016x}")
 }

@@ -92,6 +92,17 @@ pub fn offset_m(text: &str) -> Result<f64, String> {
     check("the offset", parse(text)?, (-OFFSET_M, OFFSET_M), " m")
 }
 
+/// Parses `NAME=VALUE` for `--limit`, checking the name and that the value is positive.
+pub fn parse_limit(text: &str) -> Result<(String, f64), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: write NAME=VALUE, e.g. force=60"))?;
+    let value = number_or_inf(value).map_err(|err| format!("`{text}`: {err}"))?;
+    let mut probe = skill_runtime::safety::Limits::for_skill(0.0, None);
+    probe.set(name.trim(), value).map_err(|err| err.to_string())?;
+    Ok((name.trim().to_string(), value))
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -116,15 +127,4 @@ mod tests {
         assert!(super::number_or_inf("-1e309").unwrap_err().contains("overflow"));
         assert!(super::number_or_inf("NaN").unwrap_err().contains("not a number"));
     }
-}
-
-/// Parses `NAME=VALUE` for `--limit`, checking the name and that the value is positive.
-pub fn parse_limit(text: &str) -> Result<(String, f64), String> {
-    let (name, value) = text
-        .split_once('=')
-        .ok_or_else(|| format!("`{text}`: write NAME=VALUE, e.g. force=60"))?;
-    let value = number_or_inf(value).map_err(|err| format!("`{text}`: {err}"))?;
-    let mut probe = skill_runtime::safety::Limits::for_skill(0.0, None);
-    probe.set(name.trim(), value).map_err(|err| err.to_string())?;
-    Ok((name.trim().to_string(), value))
 }

@@ -131,14 +131,28 @@ fn flange_to_tool() -> Isometry3<f64> {
 /// Draws one kind of plot for a skill into `path` (SVG). [`Plot::LearnedForce`] draws the
 /// demonstration and what was learned only; the others also draw `runs`.
 pub fn draw(kind: Plot, path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> Result<(), String> {
+    let svg = render(kind, skill, runs)?;
+    write_svg(path, &svg)
+}
+
+/// The plot `kind` as SVG text, drawn in memory: nothing reaches a file until it is whole.
+pub fn render(kind: Plot, skill: &Subject<'_>, runs: &[Trial<'_>]) -> Result<String, String> {
+    let mut svg = String::new();
     match kind {
-        Plot::Trajectory => trajectory(path, skill, runs),
-        Plot::Force => force(path, skill, runs),
-        Plot::WorldForce => world_force(path, skill, runs),
-        Plot::Timeline => timeline(path, runs),
-        Plot::LearnedForce => learned_force(path, skill),
+        Plot::Trajectory => trajectory(&mut svg, skill, runs),
+        Plot::Force => force(&mut svg, skill, runs),
+        Plot::WorldForce => world_force(&mut svg, skill, runs),
+        Plot::Timeline => timeline(&mut svg, runs),
+        Plot::LearnedForce => learned_force(&mut svg, skill),
     }
-    .map_err(|err| err.to_string())
+    .map_err(|err| err.to_string())?;
+    Ok(svg)
+}
+
+/// Writes a drawn plot all or nothing ([`crate::atomic::write`]): a full disk leaves no
+/// cut-short SVG behind.
+pub fn write_svg(path: &Path, svg: &str) -> Result<(), String> {
+    crate::atomic::write(path, svg.as_bytes()).map_err(|err| format!("cannot write `{}`: {err}", path.display()))
 }
 
 type DrawResult = Result<(), Box<dyn std::error::Error>>;
@@ -200,7 +214,7 @@ fn bounds(points: impl Iterator<Item = (f64, f64)>) -> ((f64, f64), (f64, f64)) 
     (pad(x), pad(y))
 }
 
-fn trajectory(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
+fn trajectory(svg: &mut String, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
     let offset = flange_to_tool();
     let demo = read_demo(skill.demo)?;
     let tool_of = |p: &Vector3<f64>, q: &nalgebra::UnitQuaternion<f64>| p + q * offset.translation.vector;
@@ -262,7 +276,7 @@ fn trajectory(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResul
         })
         .unwrap_or_default();
 
-    let root = SVGBackend::new(path, (1300, 560)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1300, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((1, 2));
     for (panel, (axis_name, pick)) in panels.iter().zip([
@@ -339,7 +353,7 @@ fn trajectory(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResul
     Ok(())
 }
 
-fn force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
+fn force(svg: &mut String, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
     let replay_z = skill
         .learned()
         .and_then(|l| l.frames.values().next())
@@ -378,7 +392,7 @@ fn force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
         y1 = y1.min(desired_peak * 3.0);
         y0 = y0.max(-desired_peak);
     }
-    let root = SVGBackend::new(path, (1300, 480)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1300, 480)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -423,14 +437,14 @@ fn force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
 
 /// The demonstration's applied force along each learned frame's z, with the learned desired
 /// forces over their segments (thesis Fig. 4.7, 5.9c).
-fn learned_force(path: &Path, skill: &Subject<'_>) -> DrawResult {
+fn learned_force(svg: &mut String, skill: &Subject<'_>) -> DrawResult {
     let demo = read_demo(skill.demo)?;
     let Some(bound) = skill.bound else {
         return Err("nothing learned to plot".into());
     };
     let learned = bound.learned;
     let t0 = demo.t_s.first().copied().unwrap_or(0.0);
-    let root = SVGBackend::new(path, (1300, 520)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1300, 520)).into_drawing_area();
     root.fill(&WHITE)?;
     // Label, colour, points, drawn thick.
     type Line = (String, RGBColor, Vec<(f64, f64)>, bool);
@@ -512,7 +526,7 @@ fn learned_force(path: &Path, skill: &Subject<'_>) -> DrawResult {
     Ok(())
 }
 
-fn world_force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
+fn world_force(svg: &mut String, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResult {
     let demo = read_demo(skill.demo)?;
     let t_demo0 = demo.t_s.first().copied().unwrap_or(0.0);
     let demo_series: Vec<Vec<(f64, f64)>> = (0..3)
@@ -535,7 +549,7 @@ fn world_force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResu
         }
         None => vec![Vec::new(); 3],
     };
-    let root = SVGBackend::new(path, (1300, 700)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1300, 700)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((2, 1));
     let trial_name = trial.map_or("no trial".to_string(), |o| o.variant.to_string());
@@ -573,9 +587,9 @@ fn world_force(path: &Path, skill: &Subject<'_>, runs: &[Trial<'_>]) -> DrawResu
     Ok(())
 }
 
-fn timeline(path: &Path, runs: &[Trial<'_>]) -> DrawResult {
+fn timeline(svg: &mut String, runs: &[Trial<'_>]) -> DrawResult {
     let rows = runs.len().max(1);
-    let root = SVGBackend::new(path, (1300, 60 + 56 * rows as u32)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1300, 60 + 56 * rows as u32)).into_drawing_area();
     root.fill(&WHITE)?;
     let duration = runs
         .iter()
@@ -655,10 +669,12 @@ pub struct SweepPoint<'a> {
 /// A sweep's draws, one panel per skill: height change against tilt, successes green and
 /// failures red.
 pub fn sweep(path: &Path, points: &[SweepPoint<'_>]) -> Result<(), String> {
-    sweep_panels(path, points).map_err(|err| err.to_string())
+    let mut svg = String::new();
+    sweep_panels(&mut svg, points).map_err(|err| err.to_string())?;
+    write_svg(path, &svg)
 }
 
-fn sweep_panels(path: &Path, points: &[SweepPoint<'_>]) -> DrawResult {
+fn sweep_panels(svg: &mut String, points: &[SweepPoint<'_>]) -> DrawResult {
     let mut skills: Vec<&str> = Vec::new();
     for point in points {
         if !skills.contains(&point.skill) {
@@ -666,7 +682,7 @@ fn sweep_panels(path: &Path, points: &[SweepPoint<'_>]) -> DrawResult {
         }
     }
     let panels = skills.len().max(1);
-    let root = SVGBackend::new(path, (420 * panels as u32, 400)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (420 * panels as u32, 400)).into_drawing_area();
     root.fill(&WHITE)?;
     let areas = root.split_evenly((1, panels));
     let height = points.iter().map(|p| p.height_m.abs() * 100.0).fold(1.0, f64::max) * 1.05;

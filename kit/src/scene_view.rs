@@ -152,11 +152,13 @@ fn drawn(p: Vector3<f64>) -> (f64, f64, f64) {
 /// Draws one trial's tool path over `objects` into `path` (SVG); `title` heads it. Every log in
 /// `logs` is drawn (a task's steps one after the other).
 pub fn draw(path: &Path, title: &str, logs: &[&RunLog], objects: &BTreeMap<String, ObjectSpec>) -> Result<(), String> {
-    draw_inner(path, title, logs, objects).map_err(|err| err.to_string())
+    let mut svg = String::new();
+    draw_inner(&mut svg, title, logs, objects).map_err(|err| err.to_string())?;
+    crate::plot::write_svg(path, &svg)
 }
 
 fn draw_inner(
-    path: &Path,
+    svg: &mut String,
     title: &str,
     logs: &[&RunLog],
     objects: &BTreeMap<String, ObjectSpec>,
@@ -174,7 +176,7 @@ fn draw_inner(
     };
     let peak = ticks().map(force).fold(0.0f64, f64::max);
 
-    let root = SVGBackend::new(path, (560, 440)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (560, 440)).into_drawing_area();
     root.fill(&WHITE)?;
     let (chart_area, legend_area) = root.split_vertically(400);
     let mut chart = ChartBuilder::on(&chart_area)

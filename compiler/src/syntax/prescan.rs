@@ -36,7 +36,7 @@ pub(super) fn prescan(text: &str, file: usize) -> Vec<Diag> {
         let byte = bytes[at];
         match byte {
             b'/' if bytes.get(at + 1) == Some(&b'/') => {
-                // A comment: only a NUL matters in it.
+                // A comment: only a NUL and the bidirectional controls matter in it.
                 let end = text[at..].find('\n').map_or(text.len(), |n| at + n);
                 scan.nuls(&text[at..end], at);
                 at = end;
@@ -141,10 +141,13 @@ impl Scan {
         }
     }
 
-    /// Names every NUL of a string or comment starting at `offset`.
+    /// Names every NUL and every bidirectional control (see [`bidi_name`]) of a string or
+    /// comment starting at `offset`.
     fn nuls(&mut self, text: &str, offset: usize) {
-        for (at, _) in text.match_indices('\0') {
-            self.character('\0', offset + at);
+        for (at, c) in text.char_indices() {
+            if c == '\0' || bidi_name(c).is_some() {
+                self.character(c, offset + at);
+            }
         }
     }
 
@@ -164,6 +167,23 @@ impl Scan {
         .maybe_help(help);
         self.diags.push(diag);
     }
+}
+
+/// The Unicode name of a bidirectional embedding, override or isolate control: in a comment or
+/// a string it makes an editor show the code around it in another order than it compiles in.
+fn bidi_name(c: char) -> Option<&'static str> {
+    Some(match c {
+        '\u{202A}' => "LEFT-TO-RIGHT EMBEDDING",
+        '\u{202B}' => "RIGHT-TO-LEFT EMBEDDING",
+        '\u{202C}' => "POP DIRECTIONAL FORMATTING",
+        '\u{202D}' => "LEFT-TO-RIGHT OVERRIDE",
+        '\u{202E}' => "RIGHT-TO-LEFT OVERRIDE",
+        '\u{2066}' => "LEFT-TO-RIGHT ISOLATE",
+        '\u{2067}' => "RIGHT-TO-LEFT ISOLATE",
+        '\u{2068}' => "FIRST STRONG ISOLATE",
+        '\u{2069}' => "POP DIRECTIONAL ISOLATE",
+        _ => return None,
+    })
 }
 
 /// One past the closing quote of the string that opens at `start` (or the end of its line: a
@@ -191,6 +211,17 @@ fn describe(c: char) -> (String, String, Option<String>) {
             Some(
                 "a file with a zero byte after every letter is UTF-16: save it as UTF-8 (most editors offer the \
                  encoding on save)"
+                    .to_string(),
+            ),
+        );
+    }
+    if let Some(name) = bidi_name(c) {
+        return (
+            format!("{code} {name} changes the order in which the text is shown; delete it"),
+            "a bidirectional control".to_string(),
+            Some(
+                "an editor shows the text around it reordered, so the file reads differently from how it compiles \
+                 (CVE-2021-42574); rustc refuses these too"
                     .to_string(),
             ),
         );
@@ -447,6 +478,10 @@ mod tests {
                 "U+FF11 FULLWIDTH DIGIT ONE looks like `1`; replace it with the ASCII `1`",
             ),
             ("a\0b", "U+0000 NUL is a zero byte, not text; delete it"),
+            (
+                "// x \u{202E} y",
+                "U+202E RIGHT-TO-LEFT OVERRIDE changes the order in which the text is shown; delete it",
+            ),
             (
                 "f\u{FF08}",
                 "U+FF08 FULLWIDTH LEFT PARENTHESIS looks like `(`; replace it with the ASCII `(`",

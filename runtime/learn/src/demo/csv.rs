@@ -34,6 +34,11 @@ pub const COLUMNS: [&str; 14] = [
 ];
 
 /// Separators tried when none is given, in order of preference on a tie.
+/// The most columns a demonstration's header may have: the 14 skillc reads and a recorder's
+/// others (joint angles, velocities, torques, labels) fit many times over. Checked before the
+/// header's names size any work.
+pub const MAX_COLUMNS: usize = 1024;
+
 const DELIMITERS: [u8; 4] = [b',', b';', b'\t', b'|'];
 
 /// Options for reading a demonstration.
@@ -529,12 +534,19 @@ fn parse_in_pieces<'t>(
         }
     };
     let body_start = (head.position().byte() as usize).min(text.len());
+    if header.len() > MAX_COLUMNS {
+        return Err(DemoError::TooManyColumns {
+            file: file.to_owned(),
+            columns: header.len(),
+            limit: MAX_COLUMNS,
+        });
+    }
     let names: Vec<String> = header
         .iter()
         .map(|name| String::from_utf8_lossy(name).trim().to_owned())
         .collect();
     for (idx, name) in names.iter().enumerate() {
-        if names[..idx].contains(name) && COLUMNS.contains(&name.as_str()) {
+        if COLUMNS.contains(&name.as_str()) && names[..idx].contains(name) {
             return Err(DemoError::DuplicateColumn {
                 file: file.to_owned(),
                 column: name.clone(),

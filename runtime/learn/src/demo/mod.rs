@@ -21,7 +21,7 @@ mod sign;
 mod timing;
 mod wrench;
 
-pub use self::csv::{parse_csv, parse_csv_as, read_csv, read_csv_as, Dialect, ReadOptions, COLUMNS};
+pub use self::csv::{parse_csv, parse_csv_as, read_csv, read_csv_as, Dialect, ReadOptions, COLUMNS, MAX_COLUMNS};
 pub use self::filter::{low_pass, low_pass_motion, FilterOrder};
 pub use self::noise::{noise_std, position_noise_m};
 pub use self::prepare::{
@@ -269,6 +269,19 @@ pub enum DemoError {
         file: String,
         /// The absent column names.
         columns: Vec<String>,
+    },
+    /// The header has more columns than [`MAX_COLUMNS`].
+    #[error(
+        "the header of `{file}` has {columns} columns, more than the {limit} a demonstration may have \
+         (skillc reads 14: t, px, py, pz, qw, qx, qy, qz, fx, fy, fz, mx, my, mz); drop the others"
+    )]
+    TooManyColumns {
+        /// Path of the file.
+        file: String,
+        /// Columns in its header.
+        columns: usize,
+        /// [`MAX_COLUMNS`].
+        limit: usize,
     },
     /// A column name appears twice in the header.
     #[error("column `{column}` appears twice in the header of `{file}`")]

@@ -5,7 +5,7 @@
 //! where the IR has seconds, the block limit of time-feature clustering, `usize` counts, the
 //! degrees of freedom of a constraint model, serde defaults for config files. IR types that
 //! need nothing more (points, frame axes, force and threshold sources) are used as they are by
-//! the driver ([`crate::skill::learn`]).
+//! the driver ([`crate::skill::driver`]).
 
 use skill_ir as ir;
 

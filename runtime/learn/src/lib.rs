@@ -6,7 +6,7 @@
 //! frames, forces. Everything here is plain functions over [`crate::demo::Demo`] data driven by
 //! serde-(de)serialisable config structs, so that a learning plan maps onto them directly.
 //! That mapping is one module, [`ir_seam`]: the IR's enums become these configs there and
-//! nowhere else. The driver that runs a skill's plan is [`crate::skill::learn`]; it segments
+//! nowhere else. The driver that runs a skill's plan is [`crate::skill::driver`]; it segments
 //! with [`segment::segment_demo`] like any other caller.
 //!
 //! What the driver calls for each plan element:

@@ -1,5 +1,5 @@
 //! A skill bound to its demonstration: the learning driver that runs an IR learning plan
-//! ([`learn`]), beside the learned-file format ([`learned`]) and the kinematic preview
+//! ([`driver`]), beside the learned-file format ([`learned`]) and the kinematic preview
 //! ([`rollout`]) of `skill-model`.
 //!
 //! The learned file is robot-agnostic: motions and frames describe the FLANGE pose of the

@@ -2,6 +2,13 @@
 //! request the compilation of a document (the one `skillc check` makes), its symbol index and
 //! the answer in the protocol's types. Pure but for reading imports that are not open from
 //! disk, which [`Engine::in_memory`] switches off for tests.
+//!
+//! Imports are read from disk by [`read_import`] only: regular files of at most
+//! [`MAX_IMPORT_BYTES`], so that an import of a device (`/dev/zero`), a FIFO or the server's
+//! own standard input (`/dev/stdin`) is a diagnostic at the import, not a hang or an
+//! allocation without end. [`Engine::check`] records the files each open document's
+//! compilation read, so that an edit re-checks only the documents that read the edited file
+//! ([`Engine::readers`]).
 
 use super::complete;
 use super::index::{Index, Kind, What};
@@ -11,8 +18,72 @@ use lsp_types::{
     MarkupKind, NumberOrString, Position, Range, SymbolKind, TextEdit, Uri, WorkspaceEdit,
 };
 use skill_compiler::{ast, Compilation, LoadError, Severity, SourceFile};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::io::Read;
 use std::str::FromStr;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The largest imported file read from disk: 8 MiB, as `skillc check` (the kit's
+/// `MAX_SOURCE_BYTES`). A larger one is a diagnostic at the import.
+pub const MAX_IMPORT_BYTES: u64 = 8 << 20;
+
+/// Reads an imported file from disk, as the server does and with the words `skillc check`
+/// uses (the kit's `frontend::read_source`): only a regular file (after following links),
+/// checked before it is opened (opening a FIFO for reading blocks until a writer comes), and
+/// at most [`MAX_IMPORT_BYTES`]. The error says what the path is instead (a folder, a device,
+/// a FIFO, a socket) or that it is too large.
+pub fn read_import(path: &str) -> Result<String, LoadError> {
+    let fail = |reason: String| LoadError { reason };
+    let io = |err: std::io::Error| fail(err.to_string().to_lowercase());
+    let not_a_file = |metadata: &std::fs::Metadata| {
+        fail(format!(
+            "{} is not a regular file; only files are read",
+            file_kind(metadata)
+        ))
+    };
+    let metadata = std::fs::metadata(path).map_err(io)?;
+    if !metadata.is_file() {
+        return Err(not_a_file(&metadata));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    // The path may have been replaced between the two looks; the open file is what is read.
+    let opened = file.metadata().map_err(io)?;
+    if !opened.is_file() {
+        return Err(not_a_file(&opened));
+    }
+    let mut bytes = Vec::new();
+    file.take(MAX_IMPORT_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > MAX_IMPORT_BYTES {
+        return Err(fail(format!(
+            "it is larger than {} MiB, the most a .skill file may hold",
+            MAX_IMPORT_BYTES >> 20
+        )));
+    }
+    String::from_utf8(bytes).map_err(|_| fail("not valid UTF-8 text".to_string()))
+}
+
+/// What a file that is not a regular one is, in words (as the kit's `kind_of`).
+fn file_kind(metadata: &std::fs::Metadata) -> &'static str {
+    let kind = metadata.file_type();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_fifo() {
+            return "a FIFO";
+        }
+        if kind.is_socket() {
+            return "a socket";
+        }
+        if kind.is_char_device() || kind.is_block_device() {
+            return "a device";
+        }
+    }
+    if kind.is_dir() {
+        "a folder"
+    } else {
+        "it"
+    }
+}
 
 /// The open documents and how to answer questions about them.
 #[derive(Debug)]
@@ -23,6 +94,11 @@ pub struct Engine {
     read_disk: bool,
     /// How positions count characters.
     pub encoding: Encoding,
+    /// For each open document [`Engine::check`]ed, every path its compilation asked for
+    /// (read or not): the files whose change may change its diagnostics.
+    reads: HashMap<String, BTreeSet<String>>,
+    /// How many compilations this engine made.
+    compiled: AtomicUsize,
 }
 
 /// A compiled document: the compilation, the syntax tree of every file and the index.
@@ -78,6 +154,8 @@ impl Engine {
             docs: BTreeMap::new(),
             read_disk: true,
             encoding: Encoding::Utf16,
+            reads: HashMap::new(),
+            compiled: AtomicUsize::new(0),
         }
     }
 
@@ -97,6 +175,38 @@ impl Engine {
     /// Closes a document.
     pub fn close(&mut self, name: &str) {
         self.docs.remove(name);
+        self.reads.remove(name);
+    }
+
+    /// How many compilations (of a document and its imports) this engine has made: for tests
+    /// and benchmarks of what an edit costs.
+    pub fn compilations(&self) -> usize {
+        self.compiled.load(Ordering::Relaxed)
+    }
+
+    /// The open documents whose last [`Engine::check`] read (or tried to read) `file`, by
+    /// import, directly or not: those an edit of `file` may change.
+    pub fn readers(&self, file: &str) -> Vec<String> {
+        let mut found: Vec<String> = self
+            .reads
+            .iter()
+            .filter(|(doc, reads)| reads.contains(file) && self.docs.contains_key(*doc))
+            .map(|(doc, _)| doc.clone())
+            .collect();
+        found.sort();
+        found
+    }
+
+    /// [`Engine::diagnostics`], remembering which files the compilation read for
+    /// [`Engine::readers`].
+    pub fn check(&mut self, name: &str) -> Vec<(String, Vec<lsp_types::Diagnostic>)> {
+        let Some((analysis, read)) = self.analyse_reading(name) else {
+            self.reads.remove(name);
+            return Vec::new();
+        };
+        let found = diagnostics_of(&analysis);
+        self.reads.insert(name.to_string(), read);
+        found
     }
 
     /// The names of the open documents.
@@ -111,8 +221,16 @@ impl Engine {
 
     /// Compiles an open document, reading its imports from the open documents or disk.
     pub fn analyse(&self, name: &str) -> Option<Analysis> {
+        self.analyse_reading(name).map(|(analysis, _)| analysis)
+    }
+
+    /// [`Engine::analyse`], with every path the compilation asked for.
+    fn analyse_reading(&self, name: &str) -> Option<(Analysis, BTreeSet<String>)> {
         let text = self.docs.get(name)?;
+        self.compiled.fetch_add(1, Ordering::Relaxed);
+        let mut read = BTreeSet::new();
         let mut load = |path: &str| -> Result<String, LoadError> {
+            read.insert(path.to_string());
             if let Some(open) = self.docs.get(path) {
                 return Ok(open.clone());
             }
@@ -121,13 +239,9 @@ impl Engine {
                     reason: "no such file".to_string(),
                 });
             }
-            // As `skillc check` reads them (src/frontend.rs), so that messages are the same.
-            let bytes = std::fs::read(path).map_err(|err| LoadError {
-                reason: err.to_string().to_lowercase(),
-            })?;
-            String::from_utf8(bytes).map_err(|_| LoadError {
-                reason: "not valid UTF-8 text".to_string(),
-            })
+            // As `skillc check` reads them (kit/src/frontend.rs), so that messages are the
+            // same, but only regular files of bounded size.
+            read_import(path)
         };
         let compilation = skill_compiler::compile_bytes(name, text.as_bytes().to_vec(), &[], &mut load);
         let mut asts = Vec::with_capacity(compilation.files.len());
@@ -146,29 +260,19 @@ impl Engine {
             .iter()
             .map(|f| LineIndex::new(&f.text, self.encoding))
             .collect();
-        Some(Analysis {
+        let analysis = Analysis {
             compilation,
             asts,
             index,
             lines,
-        })
+        };
+        Some((analysis, read))
     }
 
     /// The diagnostics of a document's compilation, by the file they are in (the document
     /// first, then imports with problems): what `skillc check` prints for it.
     pub fn diagnostics(&self, name: &str) -> Vec<(String, Vec<lsp_types::Diagnostic>)> {
-        let Some(analysis) = self.analyse(name) else {
-            return Vec::new();
-        };
-        let mut by_file: BTreeMap<usize, Vec<lsp_types::Diagnostic>> = BTreeMap::new();
-        by_file.insert(0, Vec::new());
-        for diag in &analysis.compilation.diags {
-            by_file.entry(diag.file).or_default().push(to_lsp(diag, &analysis));
-        }
-        by_file
-            .into_iter()
-            .map(|(file, diags)| (analysis.compilation.files[file].name.clone(), diags))
-            .collect()
+        self.analyse(name).map(|a| diagnostics_of(&a)).unwrap_or_default()
     }
 
     /// What the name at a position is.
@@ -220,7 +324,8 @@ impl Engine {
 
     /// Every use of declaration `id` of `analysis`, in its compilation and in every other open
     /// document whose compilation reads the file it is declared in (a task that imports the
-    /// skill being edited): (file name, span) pairs, the declaration among them.
+    /// skill being edited; by what its last [`Engine::check`] read, or all not yet checked):
+    /// (file name, span) pairs, the declaration among them.
     fn uses_everywhere(&self, analysis: &Analysis, id: usize) -> Vec<(String, skill_compiler::Span)> {
         let def = &analysis.index.defs[id];
         let def_file = analysis.compilation.files[def.file].name.clone();
@@ -231,7 +336,11 @@ impl Engine {
             .map(|o| (analysis.compilation.files[o.file].name.clone(), o.span))
             .collect();
         let root = &analysis.compilation.files[0].name;
-        for other in self.docs.keys().filter(|name| *name != root) {
+        // Only documents whose last check read the declaring file (or never checked) can use
+        // the declaration: the others are not compiled.
+        let may_use =
+            |name: &String| *name == def_file || self.reads.get(name).is_none_or(|read| read.contains(&def_file));
+        for other in self.docs.keys().filter(|name| *name != root && may_use(name)) {
             let Some(elsewhere) = self.analyse(other) else { continue };
             let same = elsewhere.index.defs.iter().position(|d| {
                 d.span == def.span && d.kind == def.kind && elsewhere.compilation.files[d.file].name == def_file
@@ -255,7 +364,7 @@ impl Engine {
         }
         let text = match self.docs.get(file) {
             Some(text) => text.clone(),
-            None if self.read_disk => std::fs::read_to_string(file).ok()?,
+            None if self.read_disk => read_import(file).ok()?,
             None => return None,
         };
         let source = SourceFile::new(file, text);
@@ -424,12 +533,26 @@ impl Engine {
                 docs: self.docs.clone(),
                 read_disk: self.read_disk,
                 encoding: self.encoding,
+                ..Engine::new()
             };
             scratch.open(name, &without);
             analysis = scratch.analyse(name);
         }
         complete::complete(text, offset, analysis.as_ref())
     }
+}
+
+/// The diagnostics of a compilation by file: the document first, then imports with problems.
+fn diagnostics_of(analysis: &Analysis) -> Vec<(String, Vec<lsp_types::Diagnostic>)> {
+    let mut by_file: BTreeMap<usize, Vec<lsp_types::Diagnostic>> = BTreeMap::new();
+    by_file.insert(0, Vec::new());
+    for diag in &analysis.compilation.diags {
+        by_file.entry(diag.file).or_default().push(to_lsp(diag, analysis));
+    }
+    by_file
+        .into_iter()
+        .map(|(file, diags)| (analysis.compilation.files[file].name.clone(), diags))
+        .collect()
 }
 
 /// A compiler diagnostic in the protocol's terms: its primary label's range, severity, code

@@ -2,48 +2,85 @@
 //! comes from the [`engine`] (diagnostics through the same compilation `skillc check` makes,
 //! hover, definition, references, completion, formatting, rename, document symbols).
 //!
-//! One thread answers every message in order. Diagnostics are published when a document
-//! opens and, debounced, [`DEBOUNCE`] after the last change; every open document is compiled
-//! again then, so a document that imports a changed one is up to date too. A request that
-//! panics is answered with an internal error and the server goes on.
+//! One thread answers every message in order. An edit (a document opened, changed, closed or
+//! saved) queues for checking that document and the open documents that import it, directly
+//! or not, and no other ([`workspace`]); a document queued twice is checked once. Checks run
+//! one document at a time when no message waits, so requests are answered between them;
+//! after a change they wait [`DEBOUNCE`] after the last one. A request that panics is
+//! answered with an internal error and the server goes on.
+//!
+//! The input is bounded ([`stdio`]): a message larger than [`MAX_FRAME_BYTES`] (64 MiB) ends
+//! the server with exit code 1 and a message on standard error, before anything of that size
+//! is allocated, as does input that ends in the middle of a message or is not JSON-RPC.
+//! Imports are read from disk only when they are regular files of at most
+//! [`engine::MAX_IMPORT_BYTES`] (8 MiB); a device, a FIFO, `/dev/stdin` or a larger file is a
+//! diagnostic at the import ([`engine::read_import`]).
 
 pub mod complete;
 pub mod engine;
 pub mod hover;
 pub mod index;
+pub mod stdio;
 pub mod text;
+pub mod workspace;
 
 use engine::Engine;
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{self as notif, Notification as _};
 use lsp_types::request::{self as req, Request as _};
 use lsp_types::{
-    CompletionOptions, Diagnostic, InitializeResult, OneOf, PositionEncodingKind, PublishDiagnosticsParams,
-    RenameOptions, ServerCapabilities, ServerInfo, TextDocumentSyncCapability, TextDocumentSyncKind,
-    TextDocumentSyncOptions,
+    CompletionOptions, InitializeResult, OneOf, PositionEncodingKind, PublishDiagnosticsParams, RenameOptions,
+    ServerCapabilities, ServerInfo, TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions,
 };
 use serde::de::DeserializeOwned;
-use std::collections::{BTreeMap, HashMap};
 use std::panic::AssertUnwindSafe;
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 use text::{uri_to_name, Encoding};
+use workspace::Workspace;
+
+/// The transport crate, for clients of [`serve`] (tests, benches) that do not depend on it.
+pub use lsp_server;
+pub use stdio::MAX_FRAME_BYTES;
 
 /// How long after the last change diagnostics are published.
 pub const DEBOUNCE: Duration = Duration::from_millis(150);
 
+/// While checks are queued, how often what they found is published.
+const PUBLISH_EVERY: Duration = Duration::from_millis(25);
+
 /// Runs the server on standard input and output; the exit code (0 after `shutdown` and
-/// `exit`, 1 when the client went away without them).
+/// `exit`, 1 when the client went away without them or sent a message the server refuses:
+/// over [`MAX_FRAME_BYTES`], cut off, or not JSON-RPC).
 pub fn run_stdio() -> u8 {
-    let (connection, io_threads) = Connection::stdio();
+    let input = std::io::BufReader::new(std::io::stdin());
+    let (connection, transport) = stdio::connect(input, std::io::stdout());
     let code = serve(connection);
-    match io_threads.join() {
-        Ok(()) => code,
-        Err(err) => {
-            eprintln!("skillc lsp: {err}");
+    let mut code = match transport.writer.join() {
+        Ok(Ok(())) => code,
+        Ok(Err(err)) => {
+            eprintln!("skillc lsp: cannot write to the client: {err}");
             code.max(1)
         }
+        Err(_) => code.max(1),
+    };
+    // The reader has stopped unless the server ended before the client did (it may still
+    // wait for input, and is left to the process's exit).
+    let until = Instant::now() + Duration::from_millis(200);
+    while !transport.reader.is_finished() && Instant::now() < until {
+        std::thread::sleep(Duration::from_millis(5));
     }
+    if transport.reader.is_finished() {
+        match transport.reader.join() {
+            Ok(Ok(())) => {}
+            Ok(Err(err)) => {
+                eprintln!("skillc lsp: {err}");
+                code = code.max(1);
+            }
+            Err(_) => code = code.max(1),
+        }
+    }
+    code
 }
 
 /// Serves one client on a connection until it exits; the exit code.
@@ -51,7 +88,10 @@ pub fn serve(connection: Connection) -> u8 {
     let (id, params) = match connection.initialize_start() {
         Ok(start) => start,
         Err(err) => {
-            eprintln!("skillc lsp: {err}");
+            // A client gone before `initialize` says nothing more (the transport says why).
+            if !err.channel_is_disconnected() {
+                eprintln!("skillc lsp: {err}");
+            }
             return 1;
         }
     };
@@ -76,10 +116,9 @@ pub fn serve(connection: Connection) -> u8 {
     }
     let mut server = Server {
         connection: &connection,
-        engine,
+        workspace: Workspace::new(engine),
         pending: None,
-        per_doc: BTreeMap::new(),
-        published: HashMap::new(),
+        last_published: Instant::now(),
         shut_down: false,
     };
     server.run()
@@ -125,13 +164,12 @@ fn capabilities(encoding: PositionEncodingKind) -> ServerCapabilities {
 
 struct Server<'a> {
     connection: &'a Connection,
-    engine: Engine,
-    /// When the debounced diagnostics are due.
+    /// The documents and the checks queued.
+    workspace: Workspace,
+    /// Until when queued checks wait after a change (the debounce).
     pending: Option<Instant>,
-    /// The diagnostics each open document's compilation found, by file.
-    per_doc: BTreeMap<String, Vec<(String, Vec<Diagnostic>)>>,
-    /// What was last published for each file.
-    published: HashMap<String, Vec<Diagnostic>>,
+    /// When diagnostics were last published.
+    last_published: Instant,
     shut_down: bool,
 }
 
@@ -141,25 +179,50 @@ type Failure = (ErrorCode, String);
 impl Server<'_> {
     fn run(&mut self) -> u8 {
         loop {
-            let wait = match self.pending {
-                Some(due) => due.saturating_duration_since(Instant::now()),
-                None => Duration::from_secs(3600),
+            if self.pending.is_some_and(|due| due <= Instant::now()) {
+                self.pending = None;
+            }
+            let message = if self.workspace.has_work() && self.pending.is_none() {
+                // Checks are due: messages that wait come first, then one check.
+                match self.connection.receiver.try_recv() {
+                    Ok(message) => message,
+                    Err(err) if err.is_empty() => {
+                        self.check_one();
+                        continue;
+                    }
+                    Err(_) => return 1,
+                }
+            } else {
+                let wait = match self.pending {
+                    Some(due) => due.saturating_duration_since(Instant::now()),
+                    None => Duration::from_secs(3600),
+                };
+                match self.connection.receiver.recv_timeout(wait) {
+                    Ok(message) => message,
+                    Err(err) if err.is_timeout() => continue,
+                    Err(_) => return 1,
+                }
             };
-            match self.connection.receiver.recv_timeout(wait) {
-                Ok(Message::Request(request)) => self.request(request),
-                Ok(Message::Notification(notification)) => {
+            match message {
+                Message::Request(request) => self.request(request),
+                Message::Notification(notification) => {
                     if notification.method == notif::Exit::METHOD {
                         return u8::from(!self.shut_down);
                     }
                     self.notification(notification);
                 }
-                Ok(Message::Response(_)) => {}
-                Err(err) if err.is_timeout() => {
-                    self.pending = None;
-                    self.publish_all();
-                }
-                Err(_) => return 1,
+                Message::Response(_) => {}
             }
+        }
+    }
+
+    /// Checks the next queued document, and publishes what the checks found when the queue
+    /// is empty, or after the first check of an edit, or every [`PUBLISH_EVERY`].
+    fn check_one(&mut self) {
+        let first = self.last_published.elapsed() >= PUBLISH_EVERY;
+        self.workspace.check_next();
+        if first || !self.workspace.has_work() {
+            self.publish();
         }
     }
 
@@ -180,7 +243,7 @@ impl Server<'_> {
             self.shut_down = true;
             return self.reply(id, Ok(serde_json::Value::Null));
         }
-        let engine = &self.engine;
+        let engine = &self.workspace.engine;
         let answer = std::panic::catch_unwind(AssertUnwindSafe(|| answer(engine, request)));
         let answer = answer.unwrap_or_else(|_| {
             Err((
@@ -206,19 +269,19 @@ impl Server<'_> {
                     return;
                 };
                 let name = uri_to_name(params.text_document.uri.as_str());
-                self.engine.open(&name, &params.text_document.text);
-                self.publish_all();
+                self.workspace.engine.open(&name, &params.text_document.text);
+                self.workspace.changed(&name);
             }
             notif::DidChangeTextDocument::METHOD => {
                 let Ok(params) = parse::<lsp_types::DidChangeTextDocumentParams>(notification.params) else {
                     return;
                 };
                 let name = uri_to_name(params.text_document.uri.as_str());
-                let mut text = self.engine.text(&name).unwrap_or_default().to_string();
+                let mut text = self.workspace.engine.text(&name).unwrap_or_default().to_string();
                 for change in params.content_changes {
                     match change.range {
                         Some(range) => {
-                            let lines = text::LineIndex::new(&text, self.engine.encoding);
+                            let lines = text::LineIndex::new(&text, self.workspace.engine.encoding);
                             let start = lines.offset(&text, range.start);
                             let end = lines.offset(&text, range.end).max(start);
                             text.replace_range(start..end, &change.text);
@@ -226,7 +289,8 @@ impl Server<'_> {
                         None => text = change.text,
                     }
                 }
-                self.engine.open(&name, &text);
+                self.workspace.engine.open(&name, &text);
+                self.workspace.changed(&name);
                 self.pending = Some(Instant::now() + DEBOUNCE);
             }
             notif::DidCloseTextDocument::METHOD => {
@@ -234,56 +298,35 @@ impl Server<'_> {
                     return;
                 };
                 let name = uri_to_name(params.text_document.uri.as_str());
-                self.engine.close(&name);
-                self.per_doc.remove(&name);
-                self.publish_all();
+                self.workspace.engine.close(&name);
+                self.workspace.changed(&name);
+                self.publish();
             }
-            notif::DidSaveTextDocument::METHOD => self.publish_all(),
+            notif::DidSaveTextDocument::METHOD => {
+                // The file on disk changed: what reads it from disk (not open) is checked.
+                let Ok(params) = parse::<lsp_types::DidSaveTextDocumentParams>(notification.params) else {
+                    return;
+                };
+                let name = uri_to_name(params.text_document.uri.as_str());
+                self.workspace.changed(&name);
+            }
             _ => {}
         }
     }
 
-    /// Compiles every open document and publishes what changed, clearing files whose problems
-    /// are gone.
-    fn publish_all(&mut self) {
-        for name in self.engine.open_names() {
-            let engine = &self.engine;
-            let found = std::panic::catch_unwind(AssertUnwindSafe(|| engine.diagnostics(&name)));
-            self.per_doc.insert(name, found.unwrap_or_default());
-        }
-        let mut now: HashMap<String, Vec<Diagnostic>> = HashMap::new();
-        for files in self.per_doc.values() {
-            for (file, diags) in files {
-                let all = now.entry(file.clone()).or_default();
-                for diag in diags {
-                    if !all.contains(diag) {
-                        all.push(diag.clone());
-                    }
-                }
-            }
-        }
-        let mut files: Vec<String> = now.keys().chain(self.published.keys()).cloned().collect();
-        files.sort();
-        files.dedup();
-        for file in files {
-            let diags = now.remove(&file).unwrap_or_default();
-            if self.published.get(&file) == Some(&diags) {
-                continue;
-            }
+    /// Publishes the diagnostics that changed since they were last published.
+    fn publish(&mut self) {
+        self.last_published = Instant::now();
+        for (file, diagnostics) in self.workspace.publications() {
             let Ok(uri) = lsp_types::Uri::from_str(&text::name_to_uri(&file)) else {
                 continue;
             };
             let params = PublishDiagnosticsParams {
                 uri,
-                diagnostics: diags.clone(),
+                diagnostics,
                 version: None,
             };
             self.send(Notification::new(notif::PublishDiagnostics::METHOD.to_string(), params).into());
-            if diags.is_empty() {
-                self.published.remove(&file);
-            } else {
-                self.published.insert(file, diags);
-            }
         }
     }
 }

@@ -23,7 +23,7 @@ pub struct PlantArgs {
     #[arg(long, value_name = "NAME")]
     pub robot: Option<String>,
     /// Where to accept runs and ROS 2 peers: `tcp/HOST:PORT` (`tcp/0.0.0.0:7447` for every interface).
-    #[arg(long, value_name = "tcp/HOST:PORT")]
+    #[arg(long, value_name = "tcp/HOST:PORT", value_parser = endpoint_arg)]
     pub listen: String,
     /// The ROS domain (0-232), as `ROS_DOMAIN_ID` sets it for ROS 2 tools.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232), allow_negative_numbers = true)]
@@ -40,7 +40,7 @@ pub struct PlantArgs {
 pub struct LinkArgs {
     /// Run against the plant `skillc plant` serves at `tcp/HOST:PORT` instead of simulating
     /// here; the scene still gives the robot model and the wrist sensor's mount.
-    #[arg(long, value_name = "tcp/HOST:PORT")]
+    #[arg(long, value_name = "tcp/HOST:PORT", value_parser = endpoint_arg)]
     pub plant: Option<String>,
     /// The ROS domain of --plant (0-232).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=232), allow_negative_numbers = true, requires = "plant")]
@@ -53,6 +53,19 @@ pub struct LinkArgs {
     /// late; the run prints the loop's timing.
     #[arg(long, requires = "plant")]
     pub realtime: bool,
+}
+
+/// An endpoint as `--listen` and `--plant` take it: read by Zenoh's own parser and held to
+/// `tcp/HOST:PORT` ([`skill_transport::node::parse_endpoint`]), written back as Zenoh writes it;
+/// a bad one is a usage error that names the flag (exit 2).
+fn endpoint_arg(text: &str) -> Result<String, String> {
+    #[cfg(feature = "zenoh")]
+    return skill_transport::node::parse_endpoint(text)
+        .map(|endpoint| endpoint.to_string())
+        .map_err(|err| err.to_string());
+    // Without Zenoh the command says how to get it.
+    #[cfg(not(feature = "zenoh"))]
+    Ok(text.to_owned())
 }
 
 /// The scene at `path` with `sets`, and the shipped `robot` swapped in when one is named.
@@ -88,8 +101,15 @@ mod enabled {
     /// In realtime, how long the plant waits for a command before its damped stop.
     const PLANT_SILENCE: Duration = Duration::from_millis(20);
 
+    /// Where the plant tells who it refused and what it faulted on: standard error, at once.
+    fn notice(words: &str) {
+        eprintln!("{words}");
+    }
+
     pub(super) fn serve(args: &PlantArgs, verbosity: Verbosity) -> Result<String, Failure> {
-        node::check_endpoint(&args.listen).map_err(|err| Failure::Usage(err.to_string()))?;
+        // Parsed by clap already; what Zenoh is given and what the banner names is Zenoh's own
+        // reading of it.
+        let endpoint = node::parse_endpoint(&args.listen).map_err(|err| Failure::Usage(err.to_string()))?;
         let scene = scene_with_robot(&args.scene, &args.sets, args.robot.as_deref())?;
         let mut plant = RapierPlant::from_scene(&scene).map_err(|err| Failure::Input(error_chain(&err)))?;
         let robot = plant.robot().clone();
@@ -100,13 +120,14 @@ mod enabled {
         } else {
             node::scheduling_words(&node::realtime_scheduling())
         };
-        let session = node::open(&args.listen, Role::Listen).map_err(|err| Failure::Usage(err.to_string()))?;
+        let session = node::open(endpoint.as_str(), Role::Listen).map_err(|err| Failure::Usage(err.to_string()))?;
         let options = ServeOptions {
             domain: args.domain,
             period_s: 1e-3,
             silence: PLANT_SILENCE,
             node_name: "skillc_plant".into(),
             sensor_frame: scene.spec().robot.sensor.clone(),
+            notice,
         };
         if !verbosity.quiet() {
             // A closed standard output does not stop the plant: it serves on and says nothing.
@@ -116,7 +137,7 @@ mod enabled {
                 scene.file(),
                 robot.name(),
                 robot.dof(),
-                args.listen,
+                endpoint,
                 args.domain
             ));
         }
@@ -127,7 +148,7 @@ mod enabled {
         let _ = writeln!(
             text,
             "plant: stopped after {} ticks ({:.3} s simulated): {} session(s), {} command(s) applied, {} late, {} \
-             dropped, {} unreadable, {} damped stop(s)",
+             dropped, {} unreadable, {} damped stop(s), {} fault(s), {} foreign command(s) and {} session(s) refused",
             summary.ticks,
             plant.time(),
             summary.sessions,
@@ -135,7 +156,10 @@ mod enabled {
             summary.late,
             summary.dropped,
             summary.malformed,
-            summary.damped_stops
+            summary.damped_stops,
+            summary.faults,
+            summary.foreign_commands,
+            summary.refused_starts
         );
         // What the runs took from the witness, and the steps since the last one asked.
         let mut contact = summary.contact;
@@ -156,7 +180,7 @@ mod enabled {
         endpoint: &str,
         run: impl FnOnce(Robot, &mut dyn Plant) -> Result<T, SessionError>,
     ) -> Result<(T, Option<String>), Failure> {
-        node::check_endpoint(endpoint).map_err(|err| Failure::Usage(err.to_string()))?;
+        let endpoint = node::parse_endpoint(endpoint).map_err(|err| Failure::Usage(err.to_string()))?;
         let robot = skill_runtime::exec::scene_robot(scene).map_err(|err| Failure::Input(error_chain(&err)))?;
         let mode = if link.realtime {
             LinkMode::Realtime
@@ -164,7 +188,7 @@ mod enabled {
             LinkMode::Lockstep
         };
         let options = RemoteOptions {
-            endpoint: endpoint.to_owned(),
+            endpoint: endpoint.to_string(),
             domain: link.domain,
             mode,
             connect_timeout: CONNECT_TIMEOUT,
@@ -177,9 +201,19 @@ mod enabled {
         // for every state and needs no priority over the machine's other work.
         let scheduling = (mode == LinkMode::Realtime).then(|| node::scheduling_words(&node::realtime_scheduling()));
         let mut plant = RemotePlant::connect(options, robot.dof()).map_err(|err| Failure::Input(error_chain(&err)))?;
-        let result = run(robot, &mut plant).map_err(|err| Failure::Input(error_chain(&err)))?;
-        let line = scheduling.map(|scheduling| format!("{}\n  scheduling: {scheduling}", plant.stats().line()));
-        Ok((result, line))
+        let result = run(robot, &mut plant);
+        // States from another publisher than the plant's were ignored: said whatever the verdict.
+        let foreign = plant.stats().foreign_line();
+        if let (Err(_), Some(foreign)) = (&result, &foreign) {
+            eprintln!("{foreign}");
+        }
+        let result = result.map_err(|err| Failure::Input(error_chain(&err)))?;
+        let mut lines: Vec<String> = Vec::new();
+        if let Some(scheduling) = scheduling {
+            lines.push(format!("{}\n  scheduling: {scheduling}", plant.stats().line()));
+        }
+        lines.extend(foreign);
+        Ok((result, (!lines.is_empty()).then(|| lines.join("\n  "))))
     }
 }
 

@@ -2,7 +2,8 @@
 //! run's log is the in-process run's log byte for byte, for a skill and for a task (a task's MCAP
 //! with the button's cap moving on `/scene`), and so are its contact witness's lines; in realtime
 //! the run prints the loop's line and its scheduling, and under SCHED_FIFO at most 1 % of the
-//! ticks are late; the plant stops cleanly on SIGTERM and reports what it served.
+//! ticks are late; the plant stops cleanly on SIGTERM and reports what it served; an endpoint that
+//! is not `tcp/HOST:PORT` as Zenoh reads it is a usage error naming its flag, for both commands.
 #![cfg(feature = "zenoh")]
 
 use std::io::Read;
@@ -300,6 +301,36 @@ fn without_a_plant_the_run_says_what_to_start() {
         .expect("runs");
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("tcp/HOST:PORT"));
+}
+
+#[test]
+fn bad_endpoints_are_usage_errors_that_name_their_flag() {
+    for bad in [
+        r#"tcp/127.0.0.1:7447","tcp/0.0.0.0:7448"#,
+        "tcp/host",
+        "udp/127.0.0.1:7447",
+        r#"tcp/127.0.0.1:7447""#,
+        r#"tcp/127.0.0.1":7447"#,
+        "tcp/127.0.0.1:7447#iface=lo",
+    ] {
+        let plant = skillc()
+            .args(["plant", "--scene", "examples/scenes/table.toml", "--listen", bad])
+            .output()
+            .expect("runs");
+        let mut args = TOUCH.to_vec();
+        args.extend(["--plant", bad]);
+        let run = skillc().args(&args).output().expect("runs");
+        for (output, flag) in [(plant, "--listen"), (run, "--plant")] {
+            let err = String::from_utf8_lossy(&output.stderr);
+            assert_eq!(output.status.code(), Some(2), "{flag} {bad}: {err}");
+            assert!(
+                err.contains(flag) && err.contains("tcp/HOST:PORT"),
+                "{flag} {bad}: {err}"
+            );
+            // A usage error, not Zenoh's configuration parser.
+            assert!(!err.contains("json"), "{flag} {bad}: {err}");
+        }
+    }
 }
 
 #[test]

@@ -26,17 +26,73 @@ pub enum Role {
     Connect,
 }
 
-/// Checks an endpoint as skillc takes it: `tcp/HOST:PORT` with a port.
-pub fn check_endpoint(endpoint: &str) -> Result<(), TransportError> {
+/// An endpoint as skillc takes it: `tcp/HOST:PORT`, read by Zenoh's own parser
+/// ([`zenoh::config::EndPoint`]) and then held to what skillc serves on: the `tcp` protocol (the
+/// only one built in), no metadata or configuration (`?…`, `#…`), a port from 1 to 65535 and a
+/// host that is an IP address (IPv6 in brackets) or a DNS name (letters, digits, `-` and `.`).
+/// What Zenoh is given is this value, never text spliced into a configuration.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Endpoint(zenoh::config::EndPoint);
+
+impl Endpoint {
+    /// The endpoint as Zenoh writes it (what a banner names).
+    pub fn as_str(&self) -> &str {
+        self.0.as_str()
+    }
+
+    /// Zenoh's endpoint.
+    pub fn zenoh(&self) -> &zenoh::config::EndPoint {
+        &self.0
+    }
+}
+
+impl std::fmt::Display for Endpoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Endpoint {
+    type Err = TransportError;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        parse_endpoint(text)
+    }
+}
+
+/// Whether `host` is a DNS name: dot-separated labels of 1-63 letters, digits and `-`, none
+/// starting or ending with `-`, 253 characters at most.
+fn dns_name(host: &str) -> bool {
+    host.len() <= 253
+        && host.split('.').all(|label| {
+            (1..=63).contains(&label.len())
+                && label.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-')
+                && !label.starts_with('-')
+                && !label.ends_with('-')
+        })
+}
+
+/// Reads `text` as an [`Endpoint`], or says what is wrong with it.
+pub fn parse_endpoint(text: &str) -> Result<Endpoint, TransportError> {
     let bad = |why: &str| TransportError::Endpoint {
-        endpoint: endpoint.to_owned(),
+        endpoint: text.to_owned(),
         reason: why.to_owned(),
     };
-    let Some(address) = endpoint.strip_prefix("tcp/") else {
+    let parsed: zenoh::config::EndPoint = text.parse().map_err(|err: zenoh::Error| TransportError::Endpoint {
+        endpoint: text.to_owned(),
+        reason: format!("Zenoh cannot read it ({err}); write it `tcp/HOST:PORT`"),
+    })?;
+    if parsed.protocol().as_str() != "tcp" {
         return Err(bad(
             "write it `tcp/HOST:PORT`, e.g. `tcp/127.0.0.1:7447` (only TCP is built in)",
         ));
-    };
+    }
+    if !parsed.metadata().as_str().is_empty() || !parsed.config().as_str().is_empty() || text.contains(['?', '#']) {
+        return Err(bad(
+            "skillc takes no metadata (`?…`) or configuration (`#…`) in an endpoint: `tcp/HOST:PORT`",
+        ));
+    }
+    let address = parsed.address().as_str();
     let Some((host, port)) = address.rsplit_once(':') else {
         return Err(bad("it needs a port: `tcp/HOST:PORT`"));
     };
@@ -45,36 +101,57 @@ pub fn check_endpoint(endpoint: &str) -> Result<(), TransportError> {
             "it needs a host: `tcp/HOST:PORT` (`0.0.0.0` listens on every interface)",
         ));
     }
+    let host_ok = match host.strip_prefix('[').and_then(|h| h.strip_suffix(']')) {
+        Some(v6) => v6.parse::<std::net::Ipv6Addr>().is_ok(),
+        None => host.parse::<std::net::Ipv4Addr>().is_ok() || dns_name(host),
+    };
+    if !host_ok {
+        return Err(bad(
+            "its host is neither an IP address (IPv6 in brackets: `tcp/[::1]:7447`) nor a DNS name (letters, \
+             digits, `-` and `.`)",
+        ));
+    }
     match port.parse::<u16>() {
-        Ok(port) if port > 0 => Ok(()),
+        Ok(number) if number > 0 && port.bytes().all(|b| b.is_ascii_digit()) => Ok(Endpoint(parsed)),
         _ => Err(bad("its port must be a number from 1 to 65535")),
     }
 }
 
-/// Opens a peer-mode session on `endpoint`.
+/// Checks an endpoint as skillc takes it ([`parse_endpoint`]).
+pub fn check_endpoint(endpoint: &str) -> Result<(), TransportError> {
+    parse_endpoint(endpoint).map(|_| ())
+}
+
+/// Opens a peer-mode session on `endpoint`. The configuration is built from typed values
+/// serialised as JSON (the endpoint Zenoh parsed, as one JSON string): nothing given by a user
+/// is spliced into configuration text.
 pub fn open(endpoint: &str, role: Role) -> Result<Session, TransportError> {
-    check_endpoint(endpoint)?;
+    let endpoint = parse_endpoint(endpoint)?;
     let zenoh_err = |err: zenoh::Error| TransportError::Zenoh {
         what: format!("opening a session on `{endpoint}`"),
         reason: err.to_string(),
     };
-    let mut config = zenoh::Config::default();
-    let endpoints = format!("[\"{endpoint}\"]");
+    let json = |value: serde_json::Value| value.to_string();
+    let endpoints = json(serde_json::json!([endpoint.as_str()]));
+    let none = json(serde_json::json!([]));
     let (listen, connect) = match role {
-        Role::Listen => (endpoints.as_str(), "[]"),
-        Role::Connect => ("[]", endpoints.as_str()),
+        Role::Listen => (endpoints, none),
+        Role::Connect => (none, endpoints),
     };
+    let mut config = zenoh::Config::default();
     for (key, value) in [
-        ("mode", "\"peer\""),
+        ("mode", json(serde_json::json!("peer"))),
         ("listen/endpoints", listen),
         ("connect/endpoints", connect),
-        ("scouting/multicast/enabled", "false"),
+        ("scouting/multicast/enabled", json(serde_json::json!(false))),
     ] {
-        config.insert_json5(key, value).map_err(zenoh_err)?;
+        config.insert_json5(key, &value).map_err(zenoh_err)?;
     }
     if role == Role::Connect {
         // Keep trying while the plant starts, rather than failing on the first refusal.
-        config.insert_json5("connect/timeout_ms", "-1").map_err(zenoh_err)?;
+        config
+            .insert_json5("connect/timeout_ms", &json(serde_json::json!(-1)))
+            .map_err(zenoh_err)?;
     }
     zenoh::open(config).wait().map_err(zenoh_err)
 }
@@ -234,6 +311,11 @@ impl std::fmt::Debug for RosPublisher {
 }
 
 impl RosPublisher {
+    /// The GID its samples carry in their attachment.
+    pub fn gid(&self) -> [u8; rmw::GID_BYTES] {
+        self.gid
+    }
+
     /// Publishes `payload` with the next sequence number.
     pub fn put(&self, payload: Vec<u8>) -> Result<(), TransportError> {
         let sequence = self.sequence.fetch_add(1, Ordering::Relaxed) + 1;

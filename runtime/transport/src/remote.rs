@@ -4,12 +4,19 @@
 //! the next state the plant's own clock published (in order, none skipped, so the controller's
 //! clock stays the plant's), and the loop's timing as the plant measured it is gathered in
 //! [`LoopStats`].
+//!
+//! The run takes states only from the plant it opened: the start query's answer names the GID of
+//! the plant's `/skillc/state` publisher, and states whose rmw_zenoh attachment names another (or
+//! none) are ignored and counted ([`LoopStats::foreign`]). A state that carries a
+//! [`Fault`](crate::wire::Fault) ends the run in a link failure with the fault's words.
 
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use skill_robot::plant::{ContactAudit, Observation, Plant, PlantError};
 use skill_ros::msgs::{self, Float64MultiArray, MsgType};
+use skill_ros::rmw::{self, Attachment};
+use zenoh::bytes::ZBytes;
 use zenoh::pubsub::Subscriber;
 use zenoh::{Session, Wait};
 
@@ -71,6 +78,10 @@ pub struct LoopStats {
     pub periods_us: Vec<f64>,
     /// The plant's control period, µs.
     pub nominal_period_us: f64,
+    /// States on `/skillc/state` from a publisher other than the plant's, ignored.
+    pub foreign: u64,
+    /// States in which the plant held its own damped stop.
+    pub damped_stop: u64,
 }
 
 /// The `p`-quantile (0..=1) of `values`, by the nearest rank; NaN when empty.
@@ -109,6 +120,17 @@ impl LoopStats {
             quantile(&jitter, 0.99),
         )
     }
+
+    /// `foreign: N states on /skillc/state not from the plant's publisher, ignored`, when there
+    /// were any.
+    pub fn foreign_line(&self) -> Option<String> {
+        (self.foreign > 0).then(|| {
+            format!(
+                "foreign: {} state(s) on /skillc/state not from the plant's publisher, ignored",
+                self.foreign
+            )
+        })
+    }
 }
 
 /// The arm on the other side of the link.
@@ -118,7 +140,9 @@ pub struct RemotePlant {
     commands: RosPublisher,
     _node: Node,
     session: Session,
-    states: mpsc::Receiver<Vec<u8>>,
+    states: mpsc::Receiver<(Vec<u8>, Option<[u8; rmw::GID_BYTES]>)>,
+    /// The GID of the plant's state publisher, as its answer to the start named it.
+    plant_gid: [u8; rmw::GID_BYTES],
     options: RemoteOptions,
     dof: usize,
     current: State,
@@ -148,10 +172,11 @@ impl RemotePlant {
         let mut ros = Node::new(&session, options.domain, "skillc_run")?;
         let (tx, states) = mpsc::channel();
         let subscription = ros.subscription(&session, STATE, MsgType::Float64MultiArray, move |sample| {
-            let _ = tx.send(sample.payload().to_bytes().into_owned());
+            let (payload, attachment) = node::sample_parts(&sample);
+            let _ = tx.send((payload, attachment.map(|a| a.gid)));
         })?;
         let commands = ros.publisher(&session, COMMANDS, MsgType::Float64MultiArray)?;
-        let current = start(&session, &options, dof)?;
+        let (current, plant_gid) = start(&session, &options, dof, commands.gid())?;
         let nominal_period_us = f64::NAN;
         Ok(RemotePlant {
             _subscription: subscription,
@@ -159,6 +184,7 @@ impl RemotePlant {
             _node: ros,
             session,
             states,
+            plant_gid,
             dof,
             torques: vec![0.0; dof],
             stats: LoopStats {
@@ -199,7 +225,13 @@ impl RemotePlant {
         };
         loop {
             let payload = match node::recv_until(&self.states, spin_from, deadline) {
-                Ok(payload) => payload,
+                Ok((payload, gid)) if gid == Some(self.plant_gid) => payload,
+                Ok(_) => {
+                    // Another publisher on the plant's topic (a second plant on the domain, a
+                    // replay, a stranger): not the plant this run opened.
+                    self.stats.foreign += 1;
+                    continue;
+                }
                 Err(_) => {
                     return Err(self.link_error(format!(
                         "no state from the plant at `{}` for {} ms (is it still running?)",
@@ -221,14 +253,30 @@ impl RemotePlant {
     }
 }
 
-/// Asks the plant to start a session until it answers or `options.connect_timeout` passes.
-fn start(session: &Session, options: &RemoteOptions, dof: usize) -> Result<State, TransportError> {
+/// Asks the plant to start a session, naming the run's command publisher (`commands`, its GID in
+/// rmw_zenoh's attachment), until it answers or `options.connect_timeout` passes; its state and
+/// the GID of its state publisher.
+fn start(
+    session: &Session,
+    options: &RemoteOptions,
+    dof: usize,
+    commands: [u8; rmw::GID_BYTES],
+) -> Result<(State, [u8; rmw::GID_BYTES]), TransportError> {
     let began = Instant::now();
     let key = start_key(options.domain);
     loop {
         let replies = session
             .get(key.clone())
             .payload(msgs::encode_string(options.mode.word()))
+            .attachment(ZBytes::from(
+                Attachment {
+                    sequence: 1,
+                    timestamp_ns: node::now_ns(),
+                    gid: commands,
+                }
+                .encode()
+                .to_vec(),
+            ))
             .timeout(Duration::from_millis(500))
             .wait()
             .map_err(|err| TransportError::Zenoh {
@@ -245,7 +293,15 @@ fn start(session: &Session, options: &RemoteOptions, dof: usize) -> Result<State
                 Ok(sample) => {
                     let array = Float64MultiArray::decode(&sample.payload().to_bytes())
                         .map_err(|err| mismatch(format!("answered with bytes that are no state: {err}")))?;
-                    return State::decode(&array, dof).map_err(|err| mismatch(err.0));
+                    let state = State::decode(&array, dof).map_err(|err| mismatch(err.0))?;
+                    let gid = sample
+                        .attachment()
+                        .and_then(|bytes| Attachment::decode(&bytes.to_bytes()))
+                        .map(|attachment| attachment.gid)
+                        .ok_or_else(|| {
+                            mismatch("answered without naming its state publisher (is it an older skillc?)".to_owned())
+                        })?;
+                    return Ok((state, gid));
                 }
                 Err(err) => {
                     let words = msgs::decode_string(&err.payload().to_bytes()).unwrap_or_default();
@@ -321,6 +377,13 @@ impl Plant for RemotePlant {
             .put_numbered(payload, self.current.tick as i64 + 1)
             .map_err(|err| self.link_error(err.to_string()))?;
         let state = self.next_state()?;
+        if let Some(fault) = state.fault {
+            return Err(self.link_error(format!(
+                "the plant at `{}` reports a fault: {}",
+                self.options.endpoint,
+                fault.words(&[])
+            )));
+        }
         match self.options.mode {
             LinkMode::Lockstep => {
                 if state.tick != self.current.tick + 1 {
@@ -346,6 +409,7 @@ impl Plant for RemotePlant {
         }
         self.stats.ticks += 1;
         self.stats.late += u64::from(state.late);
+        self.stats.damped_stop += u64::from(state.damped_stop);
         if state.round_trip_us.is_finite() {
             self.stats.round_trips_us.push(state.round_trip_us);
         }

@@ -15,22 +15,40 @@
 //! Foreign ROS 2 controllers drive the plant in lockstep (its default before any session): every
 //! command they publish steps it once.
 //!
+//! **Who drives it.** A run names its command publisher's GID in the rmw_zenoh attachment of its
+//! start query; from then until that publisher's liveliness token goes (the run's session closed)
+//! the run holds the plant: commands (torques, damped stops) from any other publisher and start
+//! queries from any other run are refused, counted and reported through
+//! [`ServeOptions::notice`] with who sent them. The start's answer carries the GID of the plant's
+//! `/skillc/state` publisher, so the run can ignore states from anyone else. Without
+//! authentication a GID is a claim, not a proof: this keeps stray and foreign peers out, not one
+//! that copies the GIDs it sees on the wire.
+//!
+//! **What it applies.** Torques are saturated at the joints' effort limits before they are applied,
+//! and `/joint_states` reports the saturated ones. A command with a NaN or an infinity is a
+//! [`Fault`]: none of it is applied, the plant holds its damped stop until the next session starts,
+//! and every state carries the fault, so the run fails with it.
+//!
 //! A second query, the witness ([`crate::witness_key`]), hands the run what the plant's contact
 //! witness found since the run last asked, as JSON; the plant keeps the sum of all it handed out
 //! for its own summary.
 
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use skill_robot::plant::{ContactAudit, Observation, Plant};
+use skill_robot::plant::{saturate, ContactAudit, Observation, Plant};
 use skill_robot::Robot;
 use skill_ros::msgs::{self, Float64MultiArray, Header, JointState, MsgType, Time, WrenchStamped};
+use skill_ros::rmw::{self, Attachment};
+use zenoh::bytes::ZBytes;
 use zenoh::query::Query;
+use zenoh::sample::SampleKind;
 use zenoh::{Session, Wait};
 
 use crate::node::{self, Node, RosPublisher};
-use crate::wire::{self, State};
+use crate::wire::{self, Fault, State};
 use crate::{start_key, witness_key, TransportError, COMMANDS, JOINT_STATES, STATE, WRENCH};
 
 /// How often a plant that is not stepping repeats its state.
@@ -51,6 +69,9 @@ pub struct ServeOptions {
     pub node_name: String,
     /// The frame the wrench is written in (the sensor's link).
     pub sensor_frame: String,
+    /// Told, in words, each refusal of a session, the first refusal of a damped stop and of torques
+    /// from each sender in a session, and each fault.
+    pub notice: fn(&str),
 }
 
 /// What a plant did while it was served.
@@ -70,6 +91,12 @@ pub struct ServeSummary {
     pub malformed: u64,
     /// Times the damped stop took over from a silent controller.
     pub damped_stops: u64,
+    /// Commands with a NaN or an infinity (a [`Fault`]: none applied, the damped stop held).
+    pub faults: u64,
+    /// Commands refused because another run held the plant.
+    pub foreign_commands: u64,
+    /// Start queries refused: another run held the plant, or the query named no command publisher.
+    pub refused_starts: u64,
     /// What the contact witness found over the steps it handed to runs (`None` for a plant without
     /// one, or before any run asked); the steps since the last question are the plant's to take.
     pub contact: Option<ContactAudit>,
@@ -82,16 +109,25 @@ enum Pace {
     Realtime,
 }
 
+/// A publisher's GID, as rmw_zenoh's attachment carries it.
+type Gid = [u8; rmw::GID_BYTES];
+
 enum Event {
-    /// Torques, or (`stop`) the plant's own damped stop from now on.
+    /// Torques, or (`stop`) the plant's own damped stop from now on; `gid` is the publisher's.
     Command {
         torques: Vec<f64>,
         stop: bool,
         sequence: Option<i64>,
+        gid: Option<Gid>,
     },
     Malformed,
     Start(Query),
     Witness(Query),
+    /// A ROS 2 liveliness token came (`alive`) or went.
+    Token {
+        key: String,
+        alive: bool,
+    },
 }
 
 struct Outlets {
@@ -152,6 +188,7 @@ pub fn serve(
     let _commands = ros.subscription(session, COMMANDS, MsgType::Float64MultiArray, move |sample| {
         let (payload, attachment) = node::sample_parts(&sample);
         let sequence = attachment.map(|a| a.sequence);
+        let gid = attachment.map(|a| a.gid);
         let event = match Float64MultiArray::decode(&payload).ok().and_then(|array| {
             match wire::decode_command(&array, dof).ok()? {
                 wire::Command::Effort(torques) => Some((torques.to_vec(), false)),
@@ -162,6 +199,7 @@ pub fn serve(
                 torques,
                 stop,
                 sequence,
+                gid,
             },
             None => Event::Malformed,
         };
@@ -182,6 +220,24 @@ pub fn serve(
     };
     let _start = queryable(start_key(options.domain), Event::Start)?;
     let _witness = queryable(witness_key(options.domain), Event::Witness)?;
+    // ROS 2 nodes' tokens: who a GID belongs to, and when the run holding the plant has gone.
+    let tokens_tx = tx.clone();
+    let tokens_key = format!("@ros2_lv/{}/**", options.domain);
+    let _tokens = session
+        .liveliness()
+        .declare_subscriber(tokens_key.clone())
+        .history(true)
+        .callback(move |sample| {
+            let _ = tokens_tx.send(Event::Token {
+                key: sample.key_expr().as_str().to_owned(),
+                alive: sample.kind() == SampleKind::Put,
+            });
+        })
+        .wait()
+        .map_err(|err| TransportError::Zenoh {
+            what: format!("subscribing to the liveliness tokens `{tokens_key}`"),
+            reason: err.to_string(),
+        })?;
     drop(tx);
 
     let mut server = Server {
@@ -196,6 +252,12 @@ pub fn serve(
         round_trip_us: f64::NAN,
         summary: ServeSummary::default(),
         period_s: options.period_s,
+        notice: options.notice,
+        owner: None,
+        fault: None,
+        held_stop: false,
+        tokens: HashMap::new(),
+        noticed: HashSet::new(),
     };
     server.publish(&outlets, false, f64::NAN)?;
     let mut pace = Pace::Lockstep;
@@ -221,9 +283,96 @@ struct Server<'a> {
     round_trip_us: f64,
     summary: ServeSummary,
     period_s: f64,
+    notice: fn(&str),
+    /// The command publisher of the run that holds the plant.
+    owner: Option<Gid>,
+    /// The fault of this session, held until the next one starts.
+    fault: Option<Fault>,
+    /// Whether the last step was the plant's own damped stop.
+    held_stop: bool,
+    /// The liveliness tokens alive, by the GID they give their publisher or subscription.
+    tokens: HashMap<Gid, String>,
+    /// The senders (and whether of a stop) already reported this session.
+    noticed: HashSet<(Option<Gid>, bool)>,
+}
+
+/// The first joint whose torque is NaN or infinite, as a fault.
+fn non_finite(torques: &[f64]) -> Option<Fault> {
+    torques
+        .iter()
+        .position(|tau| !tau.is_finite())
+        .map(|joint| Fault::NonFiniteTorque { joint })
 }
 
 impl Server<'_> {
+    /// Who published with `gid`, in words: the node and Zenoh session its liveliness token names.
+    fn who(&self, gid: Option<Gid>) -> String {
+        let Some(gid) = gid else {
+            return "a publisher without rmw_zenoh's attachment (no GID)".to_owned();
+        };
+        let hex: String = gid.iter().map(|byte| format!("{byte:02x}")).collect();
+        match self.tokens.get(&gid).map(|token| token.split('/').collect::<Vec<_>>()) {
+            // @ros2_lv/<domain>/<zid>/<nid>/<eid>/<kind>/<enclave>/<namespace>/<node>/...
+            Some(parts) if parts.len() > 8 => format!(
+                "node `{}` of Zenoh session {} (GID {hex})",
+                parts[8].replace('%', "/"),
+                parts[2]
+            ),
+            _ => format!("GID {hex} (no liveliness token names it)"),
+        }
+    }
+
+    /// Whether a command from `gid` may drive the plant: anyone's while no run holds it, only that
+    /// run's while one does. A refusal is counted, and told the first time a sender tries it (a
+    /// damped stop, or torques) in a session.
+    fn admit(&mut self, gid: Option<Gid>, stop: bool) -> bool {
+        let Some(owner) = self.owner else {
+            return true;
+        };
+        if gid == Some(owner) {
+            return true;
+        }
+        self.summary.foreign_commands += 1;
+        if self.noticed.insert((gid, stop)) {
+            (self.notice)(&format!(
+                "plant: refused {} from {}: the plant is held by the run of {}",
+                if stop { "a damped stop" } else { "torque commands" },
+                self.who(gid),
+                self.who(Some(owner))
+            ));
+        }
+        false
+    }
+
+    /// Raises `fault`, found in a command from `gid`, unless one is held already.
+    fn raise(&mut self, fault: Fault, gid: Option<Gid>) {
+        self.summary.faults += 1;
+        if self.fault.is_none() {
+            self.fault = Some(fault);
+            let names: Vec<String> = self.robot.joints().iter().map(|joint| joint.name.clone()).collect();
+            (self.notice)(&format!(
+                "plant: fault: {} (from {})",
+                fault.words(&names),
+                self.who(gid)
+            ));
+        }
+    }
+
+    /// Takes a liveliness token's coming or going; the plant is free again when the run holding it
+    /// has gone.
+    fn token(&mut self, key: String, alive: bool) {
+        let gid = rmw::gid(&key);
+        if alive {
+            self.tokens.insert(gid, key);
+            return;
+        }
+        if self.owner == Some(gid) {
+            self.owner = None;
+            self.noticed.clear();
+        }
+        self.tokens.remove(&gid);
+    }
+
     /// The state to publish now.
     fn state(&mut self, round_trip_us: f64, late: bool, period_us: f64) -> State {
         self.plant.observe_into(&mut self.obs);
@@ -236,6 +385,8 @@ impl Server<'_> {
             round_trip_us,
             late,
             period_us,
+            fault: self.fault,
+            damped_stop: self.held_stop,
             parts,
         }
     }
@@ -248,36 +399,73 @@ impl Server<'_> {
         Ok(())
     }
 
+    /// One step with `torques` (finite), saturated at the joints' effort limits as applied and as
+    /// `/joint_states` reports them, or the last ones held.
     fn step(&mut self, torques: Option<&[f64]>) -> Result<(), TransportError> {
+        self.held_stop = false;
         if let Some(torques) = torques {
-            self.plant.apply(torques)?;
-            self.torques.copy_from_slice(torques);
+            saturate(self.robot, torques, &mut self.torques)?;
+            self.plant.apply(&self.torques)?;
         }
         self.plant.step(self.period_s)?;
         self.tick += 1;
         Ok(())
     }
 
-    /// Answers a start query with the current state; the mode it asks for.
-    fn start(&mut self, query: &Query) -> Option<Pace> {
+    /// Answers a start query with the current state and the GID of the plant's state publisher;
+    /// the mode it asks for. The run that asks holds the plant from then on; a start from another
+    /// run while one holds it, or from one that names no command publisher, is refused.
+    fn start(&mut self, query: &Query, outlets: &Outlets) -> Option<Pace> {
         let asked = query
             .payload()
             .and_then(|bytes| msgs::decode_string(&bytes.to_bytes()).ok())
             .unwrap_or_default();
+        let refuse = |why: &str| {
+            let _ = query.reply_err(msgs::encode_string(why)).wait();
+        };
         let pace = match asked.as_str() {
             "lockstep" => Pace::Lockstep,
             "realtime" => Pace::Realtime,
             _ => {
-                let _ = query
-                    .reply_err(msgs::encode_string(&format!(
-                        "unknown mode `{asked}`: ask for `lockstep` or `realtime`"
-                    )))
-                    .wait();
+                refuse(&format!("unknown mode `{asked}`: ask for `lockstep` or `realtime`"));
                 return None;
             }
         };
+        let gid = query
+            .attachment()
+            .and_then(|bytes| Attachment::decode(&bytes.to_bytes()))
+            .map(|attachment| attachment.gid);
+        let Some(gid) = gid else {
+            self.summary.refused_starts += 1;
+            refuse("a start query names the run's command publisher in rmw_zenoh's attachment; this one has none");
+            (self.notice)("plant: refused a session whose start named no command publisher");
+            return None;
+        };
+        if let Some(owner) = self.owner.filter(|owner| *owner != gid) {
+            self.summary.refused_starts += 1;
+            let (holder, asker) = (self.who(Some(owner)), self.who(Some(gid)));
+            refuse(&format!(
+                "the plant is held by the run of {holder}; it serves one run at a time: start again when that run has \
+                 ended"
+            ));
+            (self.notice)(&format!(
+                "plant: refused a {asked} session from {asker}: held by the run of {holder}"
+            ));
+            return None;
+        }
+        self.owner = Some(gid);
+        self.fault = None;
+        self.noticed.clear();
         let state = self.state(f64::NAN, false, f64::NAN);
-        let _ = query.reply(query.key_expr().clone(), state.encode().encode()).wait();
+        let attachment = Attachment {
+            sequence: self.tick as i64,
+            timestamp_ns: node::now_ns(),
+            gid: outlets.state.gid(),
+        };
+        let _ = query
+            .reply(query.key_expr().clone(), state.encode().encode())
+            .attachment(ZBytes::from(attachment.encode().to_vec()))
+            .wait();
         self.published_at = Instant::now();
         self.summary.sessions += 1;
         Some(pace)
@@ -297,6 +485,18 @@ impl Server<'_> {
         let _ = query.reply(query.key_expr().clone(), msgs::encode_string(&json)).wait();
     }
 
+    /// Takes an event that is not a command; the mode of a session it started.
+    fn other(&mut self, event: Event, outlets: &Outlets) -> Option<Pace> {
+        match event {
+            Event::Malformed => self.summary.malformed += 1,
+            Event::Start(query) => return self.start(&query, outlets),
+            Event::Witness(query) => self.witness(&query),
+            Event::Token { key, alive } => self.token(key, alive),
+            Event::Command { .. } => {}
+        }
+        None
+    }
+
     fn lockstep(
         &mut self,
         rx: &mpsc::Receiver<Event>,
@@ -305,9 +505,15 @@ impl Server<'_> {
     ) -> Result<Pace, TransportError> {
         while !stop.load(Ordering::Relaxed) {
             match rx.recv_timeout(HEARTBEAT) {
-                Ok(Event::Command { torques, stop, .. }) => {
+                Ok(Event::Command { torques, stop, gid, .. }) => {
+                    if !self.admit(gid, stop) {
+                        continue;
+                    }
                     self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
-                    if stop {
+                    if let Some(fault) = non_finite(&torques).filter(|_| !stop) {
+                        self.raise(fault, gid);
+                    }
+                    if stop || self.fault.is_some() {
                         // The same torques the run's supervisor computes from the same state.
                         self.step_damped_stop()?;
                     } else {
@@ -317,13 +523,11 @@ impl Server<'_> {
                     self.summary.ticks += 1;
                     self.publish(outlets, false, f64::NAN)?;
                 }
-                Ok(Event::Malformed) => self.summary.malformed += 1,
-                Ok(Event::Start(query)) => {
-                    if let Some(Pace::Realtime) = self.start(&query) {
+                Ok(other) => {
+                    if let Some(Pace::Realtime) = self.other(other, outlets) {
                         return Ok(Pace::Realtime);
                     }
                 }
-                Ok(Event::Witness(query)) => self.witness(&query),
                 Err(mpsc::RecvTimeoutError::Timeout) => self.publish(outlets, false, f64::NAN)?,
                 Err(mpsc::RecvTimeoutError::Disconnected) => break,
             }
@@ -344,6 +548,7 @@ impl Server<'_> {
         let hold = std::mem::take(&mut self.hold);
         let stepped = self.step(Some(&hold));
         self.hold = hold;
+        self.held_stop = true;
         stepped
     }
 
@@ -367,15 +572,24 @@ impl Server<'_> {
                     torques,
                     stop: stop_asked,
                     sequence,
-                }) if sequence == Some(self.tick as i64 + 1) => break (torques, stop_asked),
-                Ok(Event::Command { .. }) => self.summary.dropped += 1,
-                Ok(Event::Malformed) => self.summary.malformed += 1,
-                Ok(Event::Start(query)) => {
-                    if let Some(Pace::Lockstep) = self.start(&query) {
+                    gid,
+                }) => {
+                    if !self.admit(gid, stop_asked) {
+                        continue;
+                    }
+                    if sequence == Some(self.tick as i64 + 1) {
+                        if let Some(fault) = non_finite(&torques).filter(|_| !stop_asked) {
+                            self.raise(fault, gid);
+                        }
+                        break (torques, stop_asked);
+                    }
+                    self.summary.dropped += 1;
+                }
+                Ok(other) => {
+                    if let Some(Pace::Lockstep) = self.other(other, outlets) {
                         return Ok(Pace::Lockstep);
                     }
                 }
-                Ok(Event::Witness(query)) => self.witness(&query),
                 Err(mpsc::RecvTimeoutError::Timeout) => self.publish(outlets, false, f64::NAN)?,
                 Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Pace::Realtime),
             }
@@ -399,23 +613,28 @@ impl Server<'_> {
                         torques,
                         stop: stop_asked,
                         sequence,
+                        gid,
                     }) => {
+                        if !self.admit(gid, stop_asked) {
+                            continue;
+                        }
                         run_stopped |= stop_asked;
                         if sequence == Some(self.tick as i64 + 1) {
                             self.round_trip_us = self.published_at.elapsed().as_secs_f64() * 1e6;
+                            if let Some(fault) = non_finite(&torques).filter(|_| !stop_asked) {
+                                self.raise(fault, gid);
+                            }
                             fresh = Some(torques);
                         } else {
                             self.summary.dropped += 1;
                         }
                     }
-                    Ok(Event::Malformed) => self.summary.malformed += 1,
-                    Ok(Event::Start(query)) => match self.start(&query) {
-                        Some(Pace::Lockstep) => return Ok(Pace::Lockstep),
-                        // A new realtime session: its clock starts with its first command.
-                        Some(Pace::Realtime) => return Ok(Pace::Realtime),
-                        None => {}
-                    },
-                    Ok(Event::Witness(query)) => self.witness(&query),
+                    // A new session: its clock starts with its first command.
+                    Ok(other) => {
+                        if let Some(pace) = self.other(other, outlets) {
+                            return Ok(pace);
+                        }
+                    }
                     Err(mpsc::RecvTimeoutError::Timeout) => break,
                     Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Pace::Realtime),
                 }
@@ -433,7 +652,9 @@ impl Server<'_> {
                 last_command = now;
             }
             match fresh {
-                _ if run_stopped => {
+                // The run's supervisor asked for the stop, or a command was a fault: the plant
+                // holds its damped stop for the rest of the session.
+                _ if run_stopped || self.fault.is_some() => {
                     self.step_damped_stop()?;
                     self.summary.commands += u64::from(!late);
                     // After the run has gone quiet (it ended), held ticks are not late ones.
@@ -453,7 +674,10 @@ impl Server<'_> {
                 }
                 None => {
                     self.summary.late += 1;
+                    let held_stop = self.held_stop;
                     self.step(None)?;
+                    // The last torques held are the damped stop's if that was the last step.
+                    self.held_stop = held_stop;
                 }
             }
             self.summary.ticks += 1;

@@ -8,7 +8,9 @@
 //! `arm_contact_link` (−1 for none), `round_trip_us` (publish of the previous state to the arrival
 //! of the command that answered it, NaN when none did), `late` (1 when the plant held the last
 //! command because the one for this tick had not come) and `period_us` (the plant's real time since
-//! its previous tick, NaN in lockstep), then one block `part:NAME` of length 1 for each of the
+//! its previous tick, NaN in lockstep), `fault` (two numbers: the [`Fault`]'s kind, 0 for none, and
+//! its detail) and `damped_stop` (1 when the plant held its own damped stop for this tick rather
+//! than a command's torques), then one block `part:NAME` of length 1 for each of the
 //! scene's moving parts: how far it has moved from its rest, m (a button's cap, how deep it is
 //! pressed; [`Plant::visit_parts`](skill_robot::plant::Plant::visit_parts)). A command is one block
 //! `effort` of the joint torques; which state it answers is its attachment's sequence number (the
@@ -18,7 +20,7 @@ use skill_robot::plant::Observation;
 use skill_ros::msgs::{Float64MultiArray, MultiArrayDimension};
 
 /// The blocks of a state, in order, with their lengths for `dof` joints.
-fn state_blocks(dof: usize) -> [(&'static str, usize); 11] {
+fn state_blocks(dof: usize) -> [(&'static str, usize); 13] {
     [
         ("tick", 1),
         ("t", 1),
@@ -31,6 +33,8 @@ fn state_blocks(dof: usize) -> [(&'static str, usize); 11] {
         ("round_trip_us", 1),
         ("late", 1),
         ("period_us", 1),
+        ("fault", 2),
+        ("damped_stop", 1),
     ]
 }
 
@@ -52,6 +56,53 @@ pub enum Command<'a> {
     DampedStop,
 }
 
+/// What the plant refused to apply; it holds the arm in its damped stop from then until a run
+/// starts a new session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fault {
+    /// A torque command held a NaN or an infinity, first at this joint (URDF order, from 0).
+    NonFiniteTorque {
+        /// The joint's index.
+        joint: usize,
+    },
+}
+
+impl Fault {
+    /// The fault's two numbers on the wire: its kind (from 1) and its detail.
+    fn encode(self) -> [f64; 2] {
+        match self {
+            Fault::NonFiniteTorque { joint } => [1.0, joint as f64],
+        }
+    }
+
+    /// The fault the two numbers name, `Ok(None)` for none.
+    fn decode(numbers: &[f64]) -> Result<Option<Fault>, WireError> {
+        match numbers {
+            [kind, _] if *kind == 0.0 => Ok(None),
+            [kind, joint] if *kind == 1.0 && *joint >= 0.0 && joint.fract() == 0.0 && *joint < 1e6 => {
+                Ok(Some(Fault::NonFiniteTorque { joint: *joint as usize }))
+            }
+            _ => Err(WireError(format!(
+                "a state's fault is {numbers:?}, which names no fault"
+            ))),
+        }
+    }
+
+    /// In words, with the joint's name from `names` when it has one.
+    pub fn words(self, names: &[String]) -> String {
+        match self {
+            Fault::NonFiniteTorque { joint } => format!(
+                "non-finite torque command (NaN or infinite) for {}: the plant applied none of it and holds the arm \
+                 in its damped stop",
+                names.get(joint).map_or_else(
+                    || format!("joint {} of the arm (URDF order)", joint + 1),
+                    |name| format!("joint `{name}`")
+                )
+            ),
+        }
+    }
+}
+
 /// The plant's state at one tick, as published.
 #[derive(Debug, Clone, PartialEq)]
 pub struct State {
@@ -65,6 +116,10 @@ pub struct State {
     pub late: bool,
     /// The plant's real time since its previous tick, µs (NaN in lockstep).
     pub period_us: f64,
+    /// What the plant refused in this tick's command, if anything.
+    pub fault: Option<Fault>,
+    /// Whether the plant held its own damped stop for this tick.
+    pub damped_stop: bool,
     /// Each moving part's name and how far it has moved from its rest, m.
     pub parts: Vec<(String, f64)>,
 }
@@ -79,7 +134,7 @@ impl State {
     pub fn encode(&self) -> Float64MultiArray {
         let dof = self.obs.q.len();
         let obs = &self.obs;
-        let mut data = Vec::with_capacity(2 * dof + 20 + self.parts.len());
+        let mut data = Vec::with_capacity(2 * dof + 23 + self.parts.len());
         data.push(self.tick as f64);
         data.push(obs.t);
         data.extend_from_slice(obs.q.as_slice());
@@ -91,6 +146,8 @@ impl State {
         data.push(self.round_trip_us);
         data.push(if self.late { 1.0 } else { 0.0 });
         data.push(self.period_us);
+        data.extend(self.fault.map_or([0.0, -1.0], Fault::encode));
+        data.push(if self.damped_stop { 1.0 } else { 0.0 });
         data.extend(self.parts.iter().map(|(_, offset)| offset));
         let block = |label: String, size: usize| MultiArrayDimension {
             label,
@@ -166,6 +223,8 @@ impl State {
         let round_trip_us = take(1)[0];
         let late = take(1)[0] != 0.0;
         let period_us = take(1)[0];
+        let fault = Fault::decode(take(2))?;
+        let damped_stop = take(1)[0] != 0.0;
         let parts = names
             .into_iter()
             .zip(take(labels.len() - blocks.len()).iter().copied())
@@ -179,6 +238,8 @@ impl State {
             round_trip_us,
             late,
             period_us,
+            fault,
+            damped_stop,
             parts,
         })
     }
@@ -237,6 +298,8 @@ mod tests {
             round_trip_us: 87.5,
             late: true,
             period_us: f64::NAN,
+            fault: Some(Fault::NonFiniteTorque { joint: 3 }),
+            damped_stop: true,
             parts: vec![("button".to_owned(), 0.00375), ("lever:2".to_owned(), -1e-9)],
         }
     }
@@ -251,12 +314,16 @@ mod tests {
         assert_eq!(got.round_trip_us, sent.round_trip_us);
         assert!(got.late && got.period_us.is_nan());
         assert_eq!(got.parts, sent.parts);
+        assert_eq!(got.fault, sent.fault);
+        assert!(got.damped_stop);
         let mut none = sent.clone();
         none.obs.arm_contact_link = None;
+        none.fault = None;
+        none.damped_stop = false;
         none.parts.clear();
         let got = State::decode(&none.encode(), 7).expect("state");
         assert_eq!(got.obs.arm_contact_link, None);
-        assert!(got.parts.is_empty());
+        assert!(got.parts.is_empty() && got.fault.is_none() && !got.damped_stop);
     }
 
     #[test]

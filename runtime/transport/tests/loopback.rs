@@ -1,7 +1,10 @@
 //! A served plant and a [`RemotePlant`] in one process over loopback TCP: lockstep computes what
 //! one process computes, bit for bit; what the plant publishes reads right with a CDR reader
 //! written here from the format's rules (not skill-ros's); the liveliness tokens announce the node
-//! and its topics; realtime keeps its clock; a silent plant is named.
+//! and its topics; realtime keeps its clock; a silent plant is named; `/joint_states` reports the
+//! saturated torques the plant applied and a non-finite command is a named fault; states from a
+//! foreign publisher do not reach the run, and a foreign peer's damped stops and start queries are
+//! refused while a run holds the plant; endpoints are parsed, never pasted.
 
 use std::net::TcpListener;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -14,10 +17,15 @@ use skill_robot::{Robot, LWR4};
 use skill_ros::msgs::MsgType;
 use skill_ros::rmw;
 use skill_transport::node::{self, Role};
+use skill_transport::wire;
 use skill_transport::{serve, LinkMode, RemoteOptions, RemotePlant, ServeOptions, ServeSummary};
 use zenoh::Wait;
 
 const Q0: [f64; 7] = [0.0, 0.5, 0.0, -1.2, 0.0, 1.0, 0.0];
+
+/// Held by the tests that run a realtime loop: on a 2-core machine two of them at once (each
+/// polls on both sides) make each other's ticks late.
+static REALTIME: Mutex<()> = Mutex::new(());
 
 fn endpoint() -> String {
     let port = TcpListener::bind("127.0.0.1:0")
@@ -25,6 +33,16 @@ fn endpoint() -> String {
         .expect("a free port")
         .port();
     format!("tcp/127.0.0.1:{port}")
+}
+
+/// Another free port's endpoint than `endpoint`'s.
+fn endpoint_after(endpoint: &str) -> String {
+    loop {
+        let other = self::endpoint();
+        if other != endpoint {
+            return other;
+        }
+    }
 }
 
 fn robot() -> Robot {
@@ -54,6 +72,7 @@ impl Served {
                 silence: Duration::from_millis(20),
                 node_name: "skillc_plant".into(),
                 sensor_frame: LWR4.sensor.into(),
+                notice: |words| eprintln!("{words}"),
             };
             let summary = serve(&session, &mut plant, &robot(), &options, &flag).expect("serves");
             node::close(&session);
@@ -203,6 +222,7 @@ fn lockstep_computes_what_one_process_computes_and_publishes_readable_ros_messag
 
 #[test]
 fn realtime_keeps_the_plants_clock_and_a_silent_plant_is_named() {
+    let _alone = REALTIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     let endpoint = endpoint();
     let mut served = Served::start(&endpoint, 5);
     let robot = robot();
@@ -263,9 +283,252 @@ fn no_plant_is_an_error_that_says_what_to_start() {
         text.contains("no plant answered") && text.contains("skillc plant"),
         "{text}"
     );
-    for bad in ["udp/127.0.0.1:7447", "tcp/127.0.0.1", "tcp/:7447", "tcp/h:99999"] {
+    for bad in [
+        "udp/127.0.0.1:7447",
+        "tcp/127.0.0.1",
+        "tcp/:7447",
+        "tcp/h:99999",
+        "tcp/host",
+        r#"tcp/127.0.0.1:7447","tcp/0.0.0.0:7448"#,
+        r#"tcp/127.0.0.1:7447""#,
+        r#"tcp/127.0.0.1":7447"#,
+        "tcp/127.0.0.1:7447?iface=lo",
+        "tcp/127.0.0.1:7447#so_sndbuf=1",
+        "tcp/a b:7447",
+        "tcp/127.0.0.1:+7447",
+    ] {
         assert!(node::check_endpoint(bad).is_err(), "{bad}");
+        assert!(node::open(bad, Role::Listen).is_err(), "{bad}");
     }
+    for good in [
+        "tcp/127.0.0.1:7447",
+        "tcp/0.0.0.0:7447",
+        "tcp/[::1]:7447",
+        "tcp/plant-1.lab:7447",
+    ] {
+        let parsed = node::parse_endpoint(good).expect(good);
+        assert_eq!(parsed.as_str(), good, "what the banner names is what was given");
+    }
+}
+
+/// The efforts `/joint_states` reported, with their stamps, s.
+type Efforts = Mutex<Vec<(f64, Vec<f64>)>>;
+
+/// Collects `/joint_states` on `domain` as a ROS 2 tool sees them: (stamp, efforts) each.
+fn joint_states(session: &zenoh::Session, domain: u32) -> (Arc<Efforts>, zenoh::pubsub::Subscriber<()>) {
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let sink = Arc::clone(&seen);
+    let sub = session
+        .declare_subscriber(rmw::topic_key(domain, "/joint_states", MsgType::JointState))
+        .callback(move |sample| {
+            let message = independent::joint_state(&sample.payload().to_bytes());
+            sink.lock().expect("lock").push((message.stamp_s, message.effort));
+        })
+        .wait()
+        .expect("subscribes");
+    (seen, sub)
+}
+
+/// The efforts `/joint_states` reported at plant time `t`.
+fn efforts_at(seen: &Efforts, t: f64) -> Vec<f64> {
+    for _ in 0..200 {
+        if let Some((_, effort)) = seen
+            .lock()
+            .expect("lock")
+            .iter()
+            .find(|(stamp, _)| (stamp - t).abs() < 0.5e-9)
+        {
+            return effort.clone();
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    panic!("no joint state at t = {t}");
+}
+
+#[test]
+fn joint_states_report_the_saturated_torques_and_a_non_finite_command_is_a_named_fault() {
+    let endpoint = endpoint();
+    let mut served = Served::start(&endpoint, 6);
+    let tool = node::open(&endpoint, Role::Connect).expect("a listener");
+    let (seen, _sub) = joint_states(&tool, 6);
+    let robot = robot();
+    let limits: Vec<f64> = robot.joints().iter().map(|joint| joint.effort).collect();
+    let mut over_link = remote(&endpoint, 6, LinkMode::Lockstep);
+    // Beyond every limit, both ways, and one within.
+    let sent = [500.0, 1e30, -1e30, -500.0, 0.5, f64::MAX, -f64::MAX];
+    over_link.apply(&sent).expect("apply");
+    over_link.step(1e-3).expect("a finite command steps");
+    let mut applied = vec![0.0; 7];
+    skill_robot::plant::saturate(&robot, &sent, &mut applied).expect("saturates");
+    let reported = efforts_at(&seen, over_link.time());
+    assert_eq!(
+        reported, applied,
+        "what /joint_states reports is what the plant applied"
+    );
+    assert!(reported.iter().zip(&limits).all(|(tau, limit)| tau.abs() <= *limit));
+    assert_eq!(reported[4], 0.5);
+
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let mut command = [1.0; 7];
+        command[2] = bad;
+        let t = over_link.time();
+        over_link.apply(&command).expect("apply");
+        let err = over_link.step(1e-3).expect_err("a non-finite command is a fault");
+        let reason = match &err {
+            PlantError::Link { reason, .. } => reason.clone(),
+            other => panic!("{other}"),
+        };
+        assert!(
+            reason.contains("reports a fault") && reason.contains("non-finite torque") && reason.contains("joint 3"),
+            "{reason}"
+        );
+        // What the plant applied instead: its damped stop, finite and within the limits, and
+        // that is what it reported.
+        let reported = efforts_at(&seen, t + 1e-3);
+        assert!(
+            reported
+                .iter()
+                .zip(&limits)
+                .all(|(tau, limit)| tau.is_finite() && tau.abs() <= *limit),
+            "{reported:?}"
+        );
+        assert!(
+            reported.iter().all(|tau| *tau != 1.0),
+            "the command's torques were not applied: {reported:?}"
+        );
+        // A new session starts without the fault.
+        drop(over_link);
+        over_link = remote(&endpoint, 6, LinkMode::Lockstep);
+    }
+    drop(over_link);
+    let summary = served.stop();
+    assert_eq!(summary.faults, 3, "{summary:?}");
+    assert_eq!(summary.sessions, 4, "{summary:?}");
+}
+
+#[test]
+fn a_foreign_peer_neither_feeds_the_run_states_nor_stops_or_takes_the_plant() {
+    let _alone = REALTIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let endpoint = endpoint();
+    let domain = 7;
+    let mut served = Served::start(&endpoint, domain);
+    let robot = robot();
+    let mut data = robot.data();
+    let mut over_link = remote(&endpoint, domain, LinkMode::Realtime);
+
+    // A stranger on the same domain: a peer that connects to the plant and listens on a port of
+    // its own, which the plant's gossip tells the run about, so that the run's session reaches it
+    // directly. It publishes on the run's and the plant's keys.
+    let mut config = zenoh::Config::default();
+    for (key, value) in [
+        ("mode", serde_json::json!("peer")),
+        ("listen/endpoints", serde_json::json!([endpoint_after(&endpoint)])),
+        ("connect/endpoints", serde_json::json!([endpoint])),
+        ("scouting/multicast/enabled", serde_json::json!(false)),
+    ] {
+        config.insert_json5(key, &value.to_string()).expect("config");
+    }
+    let stranger = zenoh::open(config).wait().expect("a stranger");
+    let state_key = rmw::topic_key(domain, "/skillc/state", MsgType::Float64MultiArray);
+    let command_key = rmw::topic_key(domain, "/joint_effort_commands", MsgType::Float64MultiArray);
+    let mut future = wire::State {
+        tick: 1_000_000_000,
+        obs: plant().observe(),
+        round_trip_us: f64::NAN,
+        late: false,
+        period_us: f64::NAN,
+        fault: None,
+        damped_stop: false,
+        parts: Vec::new(),
+    };
+    future.obs.t = 1e6;
+    let forged = rmw::Attachment {
+        sequence: 1,
+        timestamp_ns: node::now_ns(),
+        gid: [0x5a; rmw::GID_BYTES],
+    };
+    let stop_flag = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop_flag);
+    let refusal = Arc::new(Mutex::new(None::<String>));
+    let refusal_sink = Arc::clone(&refusal);
+    let stranger_thread = std::thread::spawn(move || {
+        let mut sent = 0;
+        while !flag.load(Ordering::Relaxed) {
+            // A state from the future, with a GID of its own and with none; a damped stop,
+            // unnumbered and numbered.
+            let state = future.encode().encode();
+            let _ = stranger
+                .put(state_key.clone(), state.clone())
+                .attachment(zenoh::bytes::ZBytes::from(forged.encode().to_vec()))
+                .wait();
+            let _ = stranger.put(state_key.clone(), state).wait();
+            let stop = wire::encode_command(&[0.0; 7], true).encode();
+            let _ = stranger.put(command_key.clone(), stop.clone()).wait();
+            let _ = stranger
+                .put(command_key.clone(), stop)
+                .attachment(zenoh::bytes::ZBytes::from(forged.encode().to_vec()))
+                .wait();
+            sent += 1;
+            if sent == 5 {
+                // And a start query of its own, naming its publisher: the plant is taken.
+                let replies = stranger
+                    .get(skill_transport::start_key(domain))
+                    .payload(skill_ros::msgs::encode_string("lockstep"))
+                    .attachment(zenoh::bytes::ZBytes::from(forged.encode().to_vec()))
+                    .timeout(Duration::from_secs(2))
+                    .wait()
+                    .expect("asks");
+                if let Ok(reply) = replies.recv() {
+                    let words = match reply.result() {
+                        Ok(_) => "accepted".to_owned(),
+                        Err(err) => skill_ros::msgs::decode_string(&err.payload().to_bytes()).unwrap_or_default(),
+                    };
+                    *refusal_sink.lock().expect("lock") = Some(words);
+                }
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        node::close(&stranger);
+        sent
+    });
+    let t0 = over_link.time();
+    for tick in 0..800 {
+        let torques = control(&robot, &mut data, &over_link, tick);
+        over_link.apply(&torques).expect("apply");
+        over_link
+            .step(1e-3)
+            .unwrap_or_else(|err| panic!("tick {tick}: the stranger stalled the run: {err}"));
+    }
+    stop_flag.store(true, Ordering::Relaxed);
+    let sent = stranger_thread.join().expect("the stranger");
+    let stats = over_link.stats().clone();
+    assert!(sent >= 5, "the stranger sent {sent} rounds");
+    // The run kept the plant's clock: its time is the plant's, never the stranger's.
+    assert!(over_link.time() - t0 < 10.0, "{}", over_link.time());
+    assert!(
+        stats.foreign > 0,
+        "no foreign state reached the run's subscription: {stats:?}"
+    );
+    // Had the stranger's damped stop been taken, the plant would have held it from its first one
+    // (a few ms in) to the end; the plant's own stop for a silent run (a stall of the machine
+    // beyond 20 ms) may hold a few ticks.
+    assert!(
+        stats.damped_stop * 2 < stats.ticks,
+        "the stranger's damped stop held the arm for {} of {} ticks",
+        stats.damped_stop,
+        stats.ticks
+    );
+    let refusal = refusal
+        .lock()
+        .expect("lock")
+        .clone()
+        .expect("the plant answered the stranger's start");
+    assert!(refusal.contains("held by"), "{refusal}");
+    drop(over_link);
+    let summary = served.stop();
+    assert!(summary.foreign_commands >= 2 * 5, "{summary:?}");
+    assert_eq!(summary.refused_starts, 1, "{summary:?}");
+    assert_eq!(summary.sessions, 1, "{summary:?}");
 }
 
 /// A CDR reader written from the format's rules for this test alone: little-endian after a 4-byte

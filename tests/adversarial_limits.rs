@@ -203,3 +203,48 @@ fn learn_with_plots_that_cannot_be_written_leaves_nothing_new() {
     let svg = std::fs::read_to_string(dir.join("plots/slide_trajectory.svg")).expect("svg");
     assert!(svg.trim_end().ends_with("</svg>"), "a whole SVG");
 }
+
+#[test]
+fn trials_files_that_are_no_text_or_run_nothing_are_input_errors() {
+    let dir = workspace("trials");
+    std::fs::write(dir.join("bag.toml"), b"\x89MCAP0\r\n\x01\x02").expect("write");
+    std::fs::write(dir.join("latin1.toml"), b"[[skill]]\nfile = \"caf\xe9.skill\"\n").expect("write");
+    for (file, why) in [("bag.toml", "is an MCAP file"), ("latin1.toml", "is not UTF-8")] {
+        let (code, out) = skillc(&dir, &["eval", "--trials", file, "--out", "report"]);
+        assert_eq!(code, 1, "{file}: {out}");
+        assert!(out.contains(file) && out.contains(why), "{out}");
+    }
+    let skill = repo("stdlib-skills/touch.skill");
+    let demo = repo("examples/demos/touch.csv");
+    let scene = repo("examples/scenes/table.toml");
+    let empty = format!("[[skill]]\nfile = \"{skill}\"\ndemo = \"{demo}\"\nscene = \"{scene}\"\nvariants = []\n");
+    std::fs::write(dir.join("empty.toml"), empty).expect("write");
+    let (code, out) = skillc(&dir, &["eval", "--trials", "empty.toml", "--out", "report"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("empty.toml") && out.contains("has no variants"), "{out}");
+    assert!(!dir.join("report").exists());
+}
+
+#[test]
+fn a_share_of_a_sweep_with_no_draws_says_so() {
+    let dir = workspace("share");
+    let (code, out) = skillc(
+        &dir,
+        &[
+            "eval",
+            "--skill",
+            "touch",
+            "--sweep",
+            "2",
+            "--partition",
+            "3/3",
+            "--out",
+            "share3",
+        ],
+    );
+    assert_eq!(code, 0, "{out}");
+    assert!(
+        out.contains("warning: share 3/3 holds none of the sweep's 2 draws"),
+        "{out}"
+    );
+}

@@ -90,6 +90,14 @@ pub(super) fn run_sweep(
         .filter(|(global, _)| partition.runs(*global))
         .map(|(_, job)| job)
         .collect();
+    if jobs.is_empty() {
+        eprintln!(
+            "warning: share {partition} holds none of the sweep's {} draws ({} skill(s) × {draws}): more shares than \
+             draws; its summary has no trials (merging it with the other shares still gives the whole sweep)",
+            prepared.len() * draws,
+            prepared.len()
+        );
+    }
     progress.set_length(jobs.len() as u64);
     progress.set_message("sweep");
     let outcomes: Vec<Outcome> = pool.install(|| {

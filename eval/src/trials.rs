@@ -197,8 +197,22 @@ pub struct Variant {
 pub(super) fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Failure> {
     let (text, name, base_dir) = match &args.trials {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
+            let bytes = std::fs::read(path)
                 .map_err(|err| Failure::Usage(format!("cannot read `{}`: {err}", path.display())))?;
+            // A file that can be read but is no TOML text is a problem in an input (exit 1).
+            if bytes.starts_with(b"\x89MCAP") {
+                return Err(Failure::Input(format!(
+                    "`{}` is an MCAP file (a ROS 2 bag), not a trials file: give a TOML file like examples/eval/default.toml",
+                    path.display()
+                )));
+            }
+            let text = String::from_utf8(bytes).map_err(|err| {
+                Failure::Input(format!(
+                    "`{}` is not UTF-8 text (byte {} is not), so it is no trials file: give a TOML file like examples/eval/default.toml",
+                    path.display(),
+                    err.utf8_error().valid_up_to()
+                ))
+            })?;
             skill_kit::atomic::note_input(path);
             let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
             (text, path.display().to_string(), base)
@@ -216,6 +230,14 @@ pub(super) fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Fail
     let trials: TrialsFile =
         toml::from_str(&text).map_err(|err| Failure::Input(format!("`{name}`: {}", err.to_string().trim())))?;
     for (index, spec) in trials.skills.iter().enumerate() {
+        if spec.variants.is_empty() && args.sweep.is_none() {
+            return Err(Failure::Input(format!(
+                "`{name}`: `[[skill]]` entry {} (`{}`) has no variants, so it would run no trial: give at least one \
+                 `[[skill.variants]]` (`name = \"as demonstrated\"` with no `set` runs the scene as written)",
+                index + 1,
+                spec.file.display()
+            )));
+        }
         spec.criteria.validate().map_err(|err| {
             Failure::Input(format!(
                 "`{name}`: `[[skill]]` entry {} (`{}`): {err}",
@@ -225,6 +247,14 @@ pub(super) fn load_trials(args: &EvalArgs) -> Result<(TrialsFile, PathBuf), Fail
         })?;
     }
     for (index, spec) in trials.tasks.iter().enumerate() {
+        if spec.variants.is_empty() && args.sweep.is_none() {
+            return Err(Failure::Input(format!(
+                "`{name}`: `[[task]]` entry {} (`{}`) has no variants, so it would run no trial: give at least one \
+                 `[[task.variants]]`",
+                index + 1,
+                spec.file.display()
+            )));
+        }
         for (step, criteria) in &spec.criteria {
             criteria.validate().map_err(|err| {
                 Failure::Input(format!(

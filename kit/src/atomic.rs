@@ -472,6 +472,20 @@ pub fn write_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> std::io::Result<T>) 
     if let Err(err) = moved {
         let _ = std::fs::remove_dir_all(&tmp);
         forget_temporary(tmp_id);
+        // Another process put its folder in place between our check and our rename: its report
+        // is whole, ours is discarded, and the OS's "Directory not empty" says none of that.
+        if matches!(
+            err.kind(),
+            std::io::ErrorKind::DirectoryNotEmpty | std::io::ErrorKind::AlreadyExists | std::io::ErrorKind::NotFound
+        ) {
+            return Err(std::io::Error::new(
+                err.kind(),
+                format!(
+                    "another process wrote this folder while this one ran ({err}): its report is in place, whole, \
+                     and this one was discarded; run again to replace it, or write to another folder"
+                ),
+            ));
+        }
         return Err(err);
     }
     Ok(value)
@@ -496,6 +510,46 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("temp dir");
         dir
+    }
+
+    #[test]
+    fn two_writers_of_one_report_folder_leave_one_whole_report_and_a_clear_message() {
+        let parent = temp_dir("race");
+        let dir = parent.join("report");
+        let barrier = std::sync::Arc::new(std::sync::Barrier::new(2));
+        let writers: Vec<_> = ["first", "second"]
+            .into_iter()
+            .map(|who| {
+                let (dir, barrier) = (dir.clone(), barrier.clone());
+                std::thread::spawn(move || {
+                    super::write_dir(&dir, |tmp| {
+                        // Both have checked that the folder is missing before either moves in.
+                        barrier.wait();
+                        std::fs::write(tmp.join("summary.json"), who)?;
+                        std::fs::create_dir(tmp.join("plots"))?;
+                        std::fs::write(tmp.join("plots").join("a.svg"), who)
+                    })
+                })
+            })
+            .collect();
+        let results: Vec<std::io::Result<()>> = writers.into_iter().map(|w| w.join().expect("thread")).collect();
+        let lost: Vec<&std::io::Error> = results.iter().filter_map(|r| r.as_ref().err()).collect();
+        assert_eq!(lost.len(), 1, "{results:?}");
+        assert!(
+            lost[0].to_string().contains("another process wrote this folder"),
+            "{}",
+            lost[0]
+        );
+        let winner = std::fs::read_to_string(dir.join("summary.json")).expect("a whole report");
+        assert_eq!(
+            std::fs::read_to_string(dir.join("plots/a.svg")).expect("its plot"),
+            winner
+        );
+        let left: Vec<String> = std::fs::read_dir(&parent)
+            .expect("parent")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(left, ["report"], "no temporary left beside it");
     }
 
     #[test]

@@ -59,9 +59,10 @@ pub(super) fn moving_profile_rate(lag_n: Option<f64>) -> f64 {
 /// that presses in place: a contact only pushes, so a profile whose fit dips below zero there
 /// (the shipped press's fit, -2 N for 60 ms where the demonstration rests near 0 N) asks for
 /// nothing instead of lifting the tool off the cap, which the force loop then has to find
-/// again. A state that moves keeps its profile as learned: its frame's z need not be the
+/// again. A state that moves keeps a 3-D profile as learned: its frame's z need not be the
 /// normal all along its path (a contour's demonstrated force directions turn over the drum
-/// while its frame does not).
+/// while its frame does not); a magnitude profile acts along z alone and is held to pushing
+/// whether the state moves or not.
 pub(super) fn push_only(force: Vector3<f64>, z: &Vector3<f64>) -> Vector3<f64> {
     let along = force.dot(z);
     if along < 0.0 {

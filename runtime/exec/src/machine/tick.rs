@@ -173,12 +173,11 @@ impl Machine<'_, '_> {
                 }
             }
             Some(LearnedForce::Magnitude { .. }) => {
+                // A magnitude acts along the compliant z by definition, moving or not: a fit that
+                // dips below zero would pull the tool off the surface (a drum's contour, -3.9 N
+                // 0.4 s into its follow), so it asks for nothing there instead.
                 let force = z * self.force_profile.as_ref().map_or(0.0, |r| r.position()[0]) * scale;
-                if self.motion.is_none() {
-                    push_only(force, &z)
-                } else {
-                    force
-                }
+                push_only(force, &z)
             }
             Some(other) => z * other.value_n().unwrap_or(0.0) * scale,
         };

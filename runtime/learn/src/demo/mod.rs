@@ -10,6 +10,7 @@
 //! Units are SI throughout: seconds, metres, newtons, newton-metres. Poses are the tool (flange)
 //! pose in the robot base frame.
 
+pub mod air;
 mod csv;
 mod filter;
 mod noise;
@@ -152,6 +153,16 @@ pub enum DemoWarning {
         /// The share of consecutive samples with the same force, 0 to 1.
         share: f64,
     },
+    /// The recording holds a load while the tool is in the air (a hand's grip, a wandering
+    /// bias), found from its own levels and removed from every sample ([`air`]).
+    AirLoad {
+        /// Source file.
+        file: String,
+        /// The largest load \[N\].
+        largest_n: f64,
+        /// How far it moved over the recording \[N\].
+        drift_n: f64,
+    },
 }
 
 /// The share of consecutive samples whose force is exactly the same (0 for fewer than three
@@ -194,6 +205,10 @@ impl std::fmt::Display for DemoWarning {
                 f,
                 "the force in `{file}` repeats exactly between {:.0} % of consecutive samples: the force sensor was not streaming (or streamed far slower than the pose was logged), so segments, frames and forces learned from the force may not describe the demonstration; check the recording, or learn only motions (`segments = none`)",
                 share * 100.0
+            ),
+            DemoWarning::AirLoad { file, largest_n, drift_n } => write!(
+                f,
+                "`{file}` holds up to {largest_n:.1} N on the sensor while the tool is in the air (moving by {drift_n:.1} N over the recording): followed between the contacts and removed from every sample, so contact forces are read against the air around them; `--keep-bias` keeps it"
             ),
         }
     }

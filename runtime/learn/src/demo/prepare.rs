@@ -104,7 +104,20 @@ pub fn prepare(demo: &Demo, config: &PreprocessConfig, wrench: &WrenchOptions) -
             share,
         });
     }
-    let (settled, wrench) = prepare_wrench(demo, wrench);
+    let (mut settled, report) = prepare_wrench(demo, wrench);
+    if !wrench.keep_bias {
+        if let Some(load) = super::air::air_load(&settled.t_s, &settled.position_m, &settled.force_n) {
+            for (t, force) in settled.t_s.iter().zip(settled.force_n.iter_mut()) {
+                *force -= load.at(*t);
+            }
+            warnings.push(DemoWarning::AirLoad {
+                file: demo.source.clone(),
+                largest_n: load.largest_n(),
+                drift_n: load.drift_n(),
+            });
+        }
+    }
+    let wrench = report;
     let demo = &settled;
     let position_noise_m = position_noise_m(&demo.t_s, &demo.position_m);
     let explicit = PreprocessConfig {

@@ -97,6 +97,25 @@ pub enum LearnError {
         /// The force.
         name: String,
     },
+    /// A constant force far from what the demonstration pressed with: outside 0.5-2 times the
+    /// median of the segment's contact samples.
+    #[error(
+        "`{name}` learned {learned_n:.2} N from a steady stretch of {from_s:.2}-{to_s:.2} s, but the demonstration \
+         pressed with a median of {median_n:.2} N over its contact in that segment: the steady stretch is not the \
+         contact (check the contact phases `skillc identify` finds, or pick one with `--phase N`)"
+    )]
+    ForceOffRecording {
+        /// The force.
+        name: String,
+        /// What was learned \[N\].
+        learned_n: f64,
+        /// The median of the segment's contact samples \[N\].
+        median_n: f64,
+        /// The steady stretch it was learned from \[s\].
+        from_s: f64,
+        /// Its end \[s\].
+        to_s: f64,
+    },
     /// No contact force where the template needs one.
     #[error("no contact in `{source_name}` for `{name}`: the largest force is {peak_n:.2} N")]
     NoContact {

@@ -56,12 +56,33 @@ impl Learner<'_> {
                     },
                     other => wrap(other),
                 })?;
-                LearnedForce::Constant {
-                    value_n: found.value_n,
-                    std_n: found.std_n,
-                    region_s: match (found.regions.first(), found.regions.last()) {
-                        (Some(first), Some(last)) => [t[first.start], t[last.end - 1]],
-                        _ => [t[0], t[t.len() - 1]],
+                let region_s = match (found.regions.first(), found.regions.last()) {
+                    (Some(first), Some(last)) => [t[first.start], t[last.end - 1]],
+                    _ => [t[0], t[t.len() - 1]],
+                };
+                check_against_recording(&decl.name, found.value_n, &profile, region_s)?;
+                match unsteady_contact(&profile, found.value_n) {
+                    Some((median_n, std_n)) => {
+                        self.warnings.push(format!(
+                            "`{}`: the force in segment {} was not steady (its quietest stretch, {:.2}-{:.2} s, held {:.2} N; \
+                             the contact's median is {median_n:.2} N): learned the median",
+                            decl.name,
+                            segment.index() + 1,
+                            region_s[0],
+                            region_s[1],
+                            found.value_n
+                        ));
+                        let contact: Vec<usize> = (0..profile.len()).filter(|&k| profile[k] > CONTACT_N).collect();
+                        LearnedForce::Constant {
+                            value_n: median_n,
+                            std_n,
+                            region_s: [t[contact[0]], t[contact[contact.len() - 1]]],
+                        }
+                    }
+                    None => LearnedForce::Constant {
+                        value_n: found.value_n,
+                        std_n: found.std_n,
+                        region_s,
                     },
                 }
             }
@@ -112,6 +133,57 @@ impl Learner<'_> {
         };
         Ok(LearnedThreshold { value })
     }
+}
+
+/// A learned constant force must lie within this share of the median contact force of the
+/// segment it was learned from, and at most [`FORCE_RATIO_MAX`] times it.
+pub(super) const FORCE_RATIO_MIN: f64 = 0.5;
+/// See [`FORCE_RATIO_MIN`].
+pub(super) const FORCE_RATIO_MAX: f64 = 2.0;
+
+/// Refuses a constant force outside [`FORCE_RATIO_MIN`]-[`FORCE_RATIO_MAX`] times the median of
+/// the segment's contact samples (those pushing with more than the contact threshold): a value
+/// learned from a short steady stretch of a hand's load between contacts (2.2 N for a wipe's
+/// 21 N) is not the demonstrator's intent. A segment without contact samples is refused earlier.
+fn check_against_recording(name: &str, learned_n: f64, profile: &[f64], region_s: [f64; 2]) -> Result<(), LearnError> {
+    let mut contact: Vec<f64> = profile.iter().copied().filter(|&f| f > CONTACT_N).collect();
+    if contact.is_empty() {
+        return Ok(());
+    }
+    contact.sort_by(f64::total_cmp);
+    let median_n = contact[contact.len() / 2];
+    if learned_n >= FORCE_RATIO_MIN * median_n && learned_n <= FORCE_RATIO_MAX * median_n {
+        return Ok(());
+    }
+    Err(LearnError::ForceOffRecording {
+        name: name.to_string(),
+        learned_n,
+        median_n,
+        from_s: region_s[0],
+        to_s: region_s[1],
+    })
+}
+
+/// A steady stretch's force farther than this share from the contact's median means the
+/// contact held no steady force (a peeling stroke rises and falls): the median is learned.
+pub(super) const UNSTEADY_SHARE: f64 = 0.15;
+
+/// The median and robust deviation of the contact samples of `profile` (those over the
+/// contact threshold) when the steady value `steady_n` lies more than [`UNSTEADY_SHARE`] from
+/// that median; `None` when it lies within it, or there is no contact.
+fn unsteady_contact(profile: &[f64], steady_n: f64) -> Option<(f64, f64)> {
+    let mut contact: Vec<f64> = profile.iter().copied().filter(|&f| f > CONTACT_N).collect();
+    if contact.is_empty() {
+        return None;
+    }
+    contact.sort_by(f64::total_cmp);
+    let median_n = contact[contact.len() / 2];
+    if (steady_n - median_n).abs() <= UNSTEADY_SHARE * median_n {
+        return None;
+    }
+    let mut deviations: Vec<f64> = contact.iter().map(|f| (f - median_n).abs()).collect();
+    deviations.sort_by(f64::total_cmp);
+    Some((median_n, 1.4826 * deviations[deviations.len() / 2]))
 }
 
 /// Force DMPs use the default (ridge) regression, which reproduces better than LWR.

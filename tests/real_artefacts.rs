@@ -129,3 +129,32 @@ fn three_passes_with_a_drifting_hand_load_are_three_phases_at_the_demonstrated_f
         );
     }
 }
+
+/// A force profile whose fit misses the demonstration by more than 15 % of its level says so
+/// with the figures (the shipped press: its onset rises faster than the profile's fit follows);
+/// one that fits (the shipped contour) says nothing.
+#[test]
+fn a_force_profile_fitted_far_from_its_level_is_a_warning_with_the_figures() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("skillc-fit-warning-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    for (skill, warned) in [("press", true), ("contour", false)] {
+        let out = Command::new(env!("CARGO_BIN_EXE_skillc"))
+            .args([
+                "learn",
+                &root.join(format!("stdlib-skills/{skill}.skill")).display().to_string(),
+                &root.join(format!("examples/demos/{skill}.csv")).display().to_string(),
+                "-o",
+                &dir.join(format!("{skill}.json")).display().to_string(),
+            ])
+            .output()
+            .expect("learn");
+        assert!(out.status.success(), "{skill}");
+        let said = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+        let line = said.lines().find(|line| line.contains("force profile"));
+        assert_eq!(line.is_some(), warned, "{skill}: {said}");
+        if let Some(line) = line {
+            assert!(line.contains("N RMS error") && line.contains("% of its level"), "{line}");
+        }
+    }
+}

@@ -100,6 +100,8 @@ impl Learner<'_> {
                 })?;
                 let rms = force_rms(&dmp, &t, |k, channel| raw[k][channel]);
                 self.quality.forces_rms_n.insert(decl.name.clone(), rms);
+                let levels: Vec<f64> = applied.iter().map(|f| f.norm()).collect();
+                self.warn_on_fit(&decl.name, rms, &levels);
                 LearnedForce::Dmp { dmp }
             }
             ir::ForceSource::Magnitude { segment, along, basis } => {
@@ -116,9 +118,30 @@ impl Learner<'_> {
                 })?;
                 let rms = force_rms(&dmp, &t, |k, _| raw[k]);
                 self.quality.forces_rms_n.insert(decl.name.clone(), rms);
+                self.warn_on_fit(&decl.name, rms, &profile);
                 LearnedForce::Magnitude { dmp }
             }
         })
+    }
+
+    /// Warns when a force profile's fit misses the demonstration by more than [`FIT_SHARE`] of
+    /// the profile's level (the median of its contact samples): the reproduction would press
+    /// with another force than the demonstrator did.
+    fn warn_on_fit(&mut self, name: &str, rms_n: f64, levels_n: &[f64]) {
+        let mut contact: Vec<f64> = levels_n.iter().copied().filter(|&f| f > CONTACT_N).collect();
+        if contact.is_empty() {
+            return;
+        }
+        contact.sort_by(f64::total_cmp);
+        let level_n = contact[contact.len() / 2];
+        if rms_n > FIT_SHARE * level_n {
+            self.warnings.push(format!(
+                "force profile `{name}` is fitted with {rms_n:.2} N RMS error, {:.0} % of its level of {level_n:.2} N: \
+                 the reproduction will not press as the demonstration did (give it more basis functions, `basis:`, or \
+                 check the segment it is learned from)",
+                100.0 * rms_n / level_n
+            ));
+        }
     }
 
     pub(super) fn threshold(&self, decl: &ir::ThresholdDecl) -> Result<LearnedThreshold, LearnError> {
@@ -185,6 +208,9 @@ fn unsteady_contact(profile: &[f64], steady_n: f64) -> Option<(f64, f64)> {
     deviations.sort_by(f64::total_cmp);
     Some((median_n, 1.4826 * deviations[deviations.len() / 2]))
 }
+
+/// A force profile fitted with an RMS error above this share of its level is warned about.
+pub(super) const FIT_SHARE: f64 = 0.15;
 
 /// Force DMPs use the default (ridge) regression, which reproduces better than LWR.
 fn force_dmp_config(basis: u32) -> DmpConfig {

@@ -154,7 +154,10 @@ fn a_force_profile_fitted_far_from_its_level_is_a_warning_with_the_figures() {
         let line = said.lines().find(|line| line.contains("force profile"));
         assert_eq!(line.is_some(), warned, "{skill}: {said}");
         if let Some(line) = line {
-            assert!(line.contains("N RMS error") && line.contains("% of its level"), "{line}");
+            assert!(
+                line.contains("N RMS error") && line.contains("% of its level"),
+                "{line}"
+            );
         }
     }
 }

@@ -76,7 +76,7 @@ fn an_unknown_robot_is_a_usage_error_naming_the_shipped_ones() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("unknown robot `ur5` for --robot (shipped: lwr4, iiwa14)"),
+        stderr.contains("unknown robot `ur5` for --robot (shipped: lwr4, iiwa14, fr3)"),
         "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&dir);

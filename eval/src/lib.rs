@@ -67,7 +67,7 @@ pub struct EvalArgs {
     /// that declares it, after the trials file's own `params`.
     #[arg(long = "param", value_name = "NAME=VALUE")]
     pub params: Vec<String>,
-    /// Run every trial on this shipped robot instead of the scene's (`lwr4`, `iiwa14`): the
+    /// Run every trial on this shipped robot instead of the scene's (`lwr4`, `iiwa14`, `fr3`): the
     /// skills learned from the same demonstrations, the robot's tool starting where the scene's
     /// robot starts its tool (inverse kinematics), objects and sensor as the scene has them.
     #[arg(long, value_name = "NAME", conflicts_with = "real")]

@@ -144,7 +144,10 @@ mod tests {
     fn an_unknown_robot_names_the_shipped_ones() {
         match Swap::new("panda", &root()) {
             Err(Failure::Usage(message)) => {
-                assert_eq!(message, "unknown robot `panda` for --robot (shipped: lwr4, iiwa14)")
+                assert_eq!(
+                    message,
+                    "unknown robot `panda` for --robot (shipped: lwr4, iiwa14, fr3)"
+                )
             }
             other => panic!("expected a usage error, got {:?}", other.map(|swap| swap.robot)),
         }

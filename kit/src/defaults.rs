@@ -86,6 +86,10 @@ const FILES: &[(&str, &str)] = &[
         "examples/robots/iiwa14.urdf",
         include_str!("../../examples/robots/iiwa14.urdf"),
     ),
+    (
+        "examples/robots/fr3.urdf",
+        include_str!("../../examples/robots/fr3.urdf"),
+    ),
 ];
 
 /// The file whose presence marks a complete folder of defaults.

@@ -1,6 +1,6 @@
 //! The robots shipped with skillc (`examples/robots/*.urdf`, each written by its generator there):
 //! their URDF compiled in, the tool link the skills act with and the link the wrist sensor
-//! measures at, by a short name (`lwr4`, `iiwa14`) that `skillc eval --robot` takes.
+//! measures at, by a short name (`lwr4`, `iiwa14`, `fr3`) that `skillc eval --robot` takes.
 
 use super::{Robot, RobotError};
 
@@ -42,8 +42,18 @@ pub const IIWA14: BuiltinRobot = BuiltinRobot {
     sensor: "iiwa_flange",
 };
 
+/// The Franka Research 3 with the same probe on its flange (`examples/robots/fr3.urdf`).
+pub const FR3: BuiltinRobot = BuiltinRobot {
+    name: "fr3",
+    title: "Franka Research 3 with the same probe",
+    path: "examples/robots/fr3.urdf",
+    urdf: include_str!("../../../examples/robots/fr3.urdf"),
+    tool: "probe_tip",
+    sensor: "fr3_wrist_sensor",
+};
+
 /// Every shipped robot.
-pub const BUILTIN_ROBOTS: [BuiltinRobot; 2] = [LWR4, IIWA14];
+pub const BUILTIN_ROBOTS: [BuiltinRobot; 3] = [LWR4, IIWA14, FR3];
 
 impl BuiltinRobot {
     /// The shipped robot called `name`, if any.
@@ -78,7 +88,7 @@ mod tests {
             assert_eq!(BuiltinRobot::find(builtin.name), Some(builtin));
         }
         assert_eq!(BuiltinRobot::find("ur5"), None);
-        assert_eq!(BuiltinRobot::names(), "lwr4, iiwa14");
+        assert_eq!(BuiltinRobot::names(), "lwr4, iiwa14, fr3");
     }
 
     /// The elbow-up seed follows each arm's axis directions: the same physical pose (probe down,
@@ -97,5 +107,24 @@ mod tests {
         let down = iiwa_tool.rotation * nalgebra::Vector3::z();
         assert!(down.z < -0.999, "iiwa tool z axis {down:?}");
         assert!(iiwa_tool.translation.vector.x > 0.4, "{:?}", iiwa_tool.translation);
+    }
+
+    /// On the FR3 (joint 2 turning the other way round, joint 6 folded by π at zero: the flange
+    /// points down at q = 0) the seed is the same elbow-up pose too, every joint inside its range.
+    #[test]
+    fn the_fr3_elbow_up_seed_unfolds_its_wrist() {
+        let fr3 = FR3.load().expect("fr3");
+        let seed = fr3.elbow_up_seed().expect("7 joints");
+        let lwr = super::super::LWR4_ELBOW_UP;
+        assert_eq!(seed[1], -lwr[1]);
+        assert_eq!(seed[3], -lwr[3]);
+        assert_eq!(seed[5], lwr[5] + std::f64::consts::PI);
+        for (value, (lower, upper)) in seed.iter().zip(fr3.position_limits()) {
+            assert!(lower < *value && *value < upper, "{seed:?}");
+        }
+        let (tool, _, _) = fr3.evaluate(&seed);
+        let down = tool.rotation * nalgebra::Vector3::z();
+        assert!(down.z < -0.999, "fr3 tool z axis {down:?}");
+        assert!(tool.translation.vector.x > 0.4, "{:?}", tool.translation);
     }
 }

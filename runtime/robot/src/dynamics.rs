@@ -115,6 +115,23 @@ impl Robot {
             .filter(|m| m.is_finite() && *m > 0.0)
     }
 
+    /// The effective rotational inertia of the tool about the unit `axis` (base frame) at `q`
+    /// \[kg m²\]: `1 / (aᵀ J_ω M⁻¹ J_ωᵀ a)`, what a torque about that axis at the tool meets.
+    /// `None` where the mass matrix is singular.
+    pub fn tool_effective_inertia(&self, q: &[f64], axis: &Vector3<f64>) -> Option<f64> {
+        let n = self.dof();
+        let mut data = self.data();
+        self.forward_kinematics(&mut data, q);
+        let mut mass = DMatrix::zeros(n, n);
+        self.mass_matrix(&mut data, &mut mass);
+        let mut jacobian = nalgebra::Matrix6xX::zeros(n);
+        self.tool_jacobian(&data, &mut jacobian);
+        let row = jacobian.fixed_rows::<3>(3).tr_mul(axis);
+        mass.cholesky()
+            .map(|chol| 1.0 / row.dot(&chol.solve(&row)))
+            .filter(|i| i.is_finite() && *i > 0.0)
+    }
+
     /// The joint-space mass matrix M(q) at the configuration of the last
     /// [`Robot::forward_kinematics`], by the composite-rigid-body algorithm (Walker and Orin;
     /// Featherstone, *Rigid Body Dynamics Algorithms*, §6.2) for a serial chain: one backward

@@ -67,8 +67,10 @@ impl Robot {
 
     /// [`LWR4_ELBOW_UP`] for this arm: a 7-joint arm whose axes at q = 0 are those of the LWR-IV
     /// up to sign (z, ∓y, z, ±y, z, ∓y, z in the base frame, stretched straight up) gets the
-    /// LWR-IV's elbow-up angles with each joint's sign matched to its axis; an arm with other
-    /// axes the LWR-IV's angles as they are (a seed only), an arm with another joint count none.
+    /// LWR-IV's elbow-up angles with each joint's sign matched to its axis, and π added to a
+    /// bending joint its zero folds (the FR3's joint 6: 2.0 rad for the LWR-IV's −1.14); an arm
+    /// with other axes the LWR-IV's angles as they are (a seed only), an arm with another joint
+    /// count none.
     pub fn elbow_up_seed(&self) -> Option<[f64; 7]> {
         const LWR4_AXES: [[f64; 3]; 7] = [
             [0.0, 0.0, 1.0],
@@ -98,6 +100,14 @@ impl Robot {
         }
         for (value, sign) in seed.iter_mut().zip(signs) {
             *value *= sign;
+        }
+        // A roll joint (1, 3, 5, 7) whose axis at q = 0 points against the one before it: this
+        // arm's zero has the bending joint between them folded by π (the Franka's wrist, its
+        // flange pointing down at q = 0 where the LWR-IV's points up), so the seed unfolds it.
+        for roll in [2, 4, 6] {
+            if signs[roll] != signs[roll - 2] {
+                seed[roll - 1] += std::f64::consts::PI;
+            }
         }
         Some(seed)
     }

@@ -29,7 +29,7 @@ mod inspect;
 mod kinematics;
 mod model;
 
-pub use builtin::{BuiltinRobot, BUILTIN_ROBOTS, IIWA14, LWR4};
+pub use builtin::{BuiltinRobot, BUILTIN_ROBOTS, FR3, IIWA14, LWR4};
 pub use dynamics::STOP_TIME_CONSTANT_S;
 pub use error::RobotError;
 pub use ik::LWR4_ELBOW_UP;

@@ -178,6 +178,13 @@ pub struct HybridController {
     state: ControlState,
 }
 
+/// The controller's period \[s\]: it runs at 1 kHz.
+const CONTROL_PERIOD_S: f64 = 1e-3;
+/// The share of the wrist's stability bound `2 I / dt` the rotational damping may take: 0.46,
+/// which leaves the LWR-IV's 0.4 N m s/rad as it was (its bound, about 0.88) and caps the
+/// FR3's at about 0.12.
+const WRIST_DAMPING_SHARE: f64 = 0.46;
+
 impl HybridController {
     /// A controller for `robot`, reading the wrist sensor at `sensor_link`, with the null space
     /// pulled towards `q_rest`.
@@ -190,6 +197,17 @@ impl HybridController {
         robot.check_dof(q_rest.len())?;
         if gains.force_axis_mass_kg.is_none() {
             gains.force_axis_mass_kg = robot.tool_effective_mass(q_rest, &Vector3::z());
+        }
+        // Damping from the last tick's velocity is stable only below 2 I / dt, I the inertia
+        // about the tool's axis: each arm's wrist bounds its own (the FR3's, 1.3e-4 kg m², rang
+        // at the LWR-IV's 0.4 N m s/rad).
+        let mut rest = robot.data();
+        robot.forward_kinematics(&mut rest, q_rest);
+        let tool_axis = robot.tool_in_base(&rest).rotation * Vector3::z();
+        if let Some(inertia) = robot.tool_effective_inertia(q_rest, &tool_axis) {
+            let stable = WRIST_DAMPING_SHARE * 2.0 * inertia / CONTROL_PERIOD_S;
+            gains.max_rotational_damping = gains.max_rotational_damping.min(stable);
+            gains.force_axis_rotational_damping = gains.force_axis_rotational_damping.min(stable);
         }
         let sensor_link = robot.require_link(sensor_link)?;
         let n = robot.dof();
@@ -451,6 +469,31 @@ fn rotation_error(desired: &UnitQuaternion<f64>, current: &UnitQuaternion<f64>) 
 mod tests {
     use super::*;
     use nalgebra::Translation3;
+
+    /// Each arm's wrist bounds its rotational damping: the LWR-IV keeps the 0.4 N m s/rad it
+    /// was tuned with, the FR3, whose wrist is about three times lighter, gets about 0.12.
+    #[test]
+    fn the_rotational_damping_stays_under_each_wrists_stability_bound() {
+        let damping = |robot: skill_robot::BuiltinRobot, q: &[f64]| {
+            let model = robot.load().expect("shipped robot");
+            let controller =
+                HybridController::new(model, robot.sensor, q, ControllerGains::default()).expect("controller");
+            (
+                controller.gains().max_rotational_damping,
+                controller.gains().force_axis_rotational_damping,
+            )
+        };
+        let defaults = ControllerGains::default();
+        let lwr = damping(skill_robot::LWR4, &skill_robot::LWR4_ELBOW_UP);
+        assert_eq!(
+            lwr,
+            (defaults.max_rotational_damping, defaults.force_axis_rotational_damping)
+        );
+        // The FR3 at its scenes' start (joint 4 bent, joint 6 at 2 rad).
+        let fr3 = damping(skill_robot::FR3, &[0.0, -0.5, 0.0, -2.0, 0.0, 2.0, 0.0]);
+        assert!(fr3.0 > 0.08 && fr3.0 < 0.16, "{fr3:?}");
+        assert!(fr3.1 <= fr3.0, "{fr3:?}");
+    }
 
     fn state_at(tool: Isometry3<f64>, applied: Vector6<f64>) -> ControlState {
         ControlState {

@@ -145,6 +145,8 @@ fn bad_settings_are_refused_naming_the_setting() {
         text.contains("parameter `hold` of `touch_hold` is a duration, this value is a force"),
         "{text}"
     );
+    // Where it is names the setting: one of several `--param`s.
+    assert!(text.contains("--param hold:1:"), "{text}");
     let (code, text) = check("hold");
     assert_eq!(code, Some(1), "{text}");
     assert!(text.contains("cannot read `--param hold`"), "{text}");

@@ -132,8 +132,14 @@ pub fn compile(root: SourceFile, load: &mut dyn FnMut(&str) -> Result<String, Lo
     compile_with_params(root, &[], load)
 }
 
-/// The name under which `--param` settings appear in diagnostics.
+/// The name under which `--param` settings appear in diagnostics, followed by the parameter's
+/// name (`--param hold`); [`is_param_file`] tells such a file.
 pub const PARAM_FILE: &str = "--param";
+
+/// Whether a compilation's file named `name` holds a `--param` setting, not a `.skill` file.
+pub fn is_param_file(name: &str) -> bool {
+    name == PARAM_FILE || name.starts_with("--param ")
+}
 
 /// Compiles `root` with parameter settings from the command line (`NAME=VALUE`, as given to
 /// `--param`): each sets the parameter of that name in every skill that declares one, before
@@ -318,13 +324,20 @@ fn noted(diag: Diag, note: &str) -> Diag {
     diag.help(help)
 }
 
-/// Parses `--param` settings, each into a file of its own named [`PARAM_FILE`] (so that a
+/// Parses `--param` settings, each into a file of its own named [`PARAM_FILE`] and the
+/// parameter (`--param hold`; so that a
 /// diagnostic can point into it); a setting that does not parse is reported there.
 fn command_line_settings(params: &[String], files: &mut Vec<SourceFile>, diags: &mut Vec<Diag>) -> Vec<ParamSetting> {
     let mut settings = Vec::new();
     for text in params {
         let file = files.len();
-        files.push(SourceFile::new(PARAM_FILE, text.as_str()));
+        // Named after the parameter it sets (`--param hold`), so that a diagnostic's location
+        // (`--param hold:1:6`) says which of several settings it is about.
+        let name = match text.split_once('=') {
+            Some((param, _)) if !param.trim().is_empty() => format!("{PARAM_FILE} {}", param.trim()),
+            _ => PARAM_FILE.to_string(),
+        };
+        files.push(SourceFile::new(name, text.as_str()));
         match syntax::parse_param_setting(text) {
             Ok((name, value)) => settings.push(ParamSetting {
                 name,

@@ -248,7 +248,7 @@ impl Engine {
         for (file, source) in compilation.files.iter().enumerate() {
             if file == 0 {
                 asts.push(compilation.ast.clone());
-            } else if source.name == skill_compiler::PARAM_FILE {
+            } else if skill_compiler::is_param_file(&source.name) {
                 asts.push(ast::File::default());
             } else {
                 asts.push(skill_compiler::syntax::parse(source, file).0);

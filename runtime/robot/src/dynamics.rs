@@ -102,23 +102,19 @@ impl Robot {
     /// # Panics
     /// If `q.len()` differs from [`Robot::dof`].
     pub fn tool_effective_mass(&self, q: &[f64], direction: &Vector3<f64>) -> Option<f64> {
-        let n = self.dof();
-        let mut data = self.data();
-        self.forward_kinematics(&mut data, q);
-        let mut mass = DMatrix::zeros(n, n);
-        self.mass_matrix(&mut data, &mut mass);
-        let mut jacobian = nalgebra::Matrix6xX::zeros(n);
-        self.tool_jacobian(&data, &mut jacobian);
-        let row = jacobian.fixed_rows::<3>(0).tr_mul(direction);
-        mass.cholesky()
-            .map(|chol| 1.0 / row.dot(&chol.solve(&row)))
-            .filter(|m| m.is_finite() && *m > 0.0)
+        self.tool_effective(q, 0, direction)
     }
 
     /// The effective rotational inertia of the tool about the unit `axis` (base frame) at `q`
     /// \[kg m²\]: `1 / (aᵀ J_ω M⁻¹ J_ωᵀ a)`, what a torque about that axis at the tool meets.
     /// `None` where the mass matrix is singular.
     pub fn tool_effective_inertia(&self, q: &[f64], axis: &Vector3<f64>) -> Option<f64> {
+        self.tool_effective(q, 3, axis)
+    }
+
+    /// `1 / (uᵀ J M⁻¹ Jᵀ u)` with `J` the tool Jacobian's three rows from `first` (0: linear,
+    /// 3: angular) at `q`: the effective mass or inertia along or about `u`.
+    fn tool_effective(&self, q: &[f64], first: usize, u: &Vector3<f64>) -> Option<f64> {
         let n = self.dof();
         let mut data = self.data();
         self.forward_kinematics(&mut data, q);
@@ -126,10 +122,10 @@ impl Robot {
         self.mass_matrix(&mut data, &mut mass);
         let mut jacobian = nalgebra::Matrix6xX::zeros(n);
         self.tool_jacobian(&data, &mut jacobian);
-        let row = jacobian.fixed_rows::<3>(3).tr_mul(axis);
+        let row = jacobian.fixed_rows::<3>(first).tr_mul(u);
         mass.cholesky()
             .map(|chol| 1.0 / row.dot(&chol.solve(&row)))
-            .filter(|i| i.is_finite() && *i > 0.0)
+            .filter(|m| m.is_finite() && *m > 0.0)
     }
 
     /// The joint-space mass matrix M(q) at the configuration of the last

@@ -60,9 +60,13 @@ impl Learner<'_> {
                     (Some(first), Some(last)) => [t[first.start], t[last.end - 1]],
                     _ => [t[0], t[t.len() - 1]],
                 };
-                check_against_recording(&decl.name, found.value_n, &profile, region_s)?;
-                match unsteady_contact(&profile, found.value_n) {
-                    Some((median_n, std_n)) => {
+                let contact = ContactLevel::of(&profile);
+                if let Some(contact) = &contact {
+                    check_against_recording(&decl.name, found.value_n, contact, region_s)?;
+                }
+                match contact.filter(|contact| contact.unsteady(found.value_n)) {
+                    Some(contact) => {
+                        let median_n = contact.median_n;
                         self.warnings.push(format!(
                             "`{}`: the force in segment {} was not steady (its quietest stretch, {:.2}-{:.2} s, held {:.2} N; \
                              the contact's median is {median_n:.2} N): learned the median",
@@ -72,11 +76,10 @@ impl Learner<'_> {
                             region_s[1],
                             found.value_n
                         ));
-                        let contact: Vec<usize> = (0..profile.len()).filter(|&k| profile[k] > CONTACT_N).collect();
                         LearnedForce::Constant {
                             value_n: median_n,
-                            std_n,
-                            region_s: [t[contact[0]], t[contact[contact.len() - 1]]],
+                            std_n: contact.deviation_n(),
+                            region_s: [t[contact.first], t[contact.last]],
                         }
                     }
                     None => LearnedForce::Constant {
@@ -128,12 +131,9 @@ impl Learner<'_> {
     /// the profile's level (the median of its contact samples): the reproduction would press
     /// with another force than the demonstrator did.
     fn warn_on_fit(&mut self, name: &str, rms_n: f64, levels_n: &[f64]) {
-        let mut contact: Vec<f64> = levels_n.iter().copied().filter(|&f| f > CONTACT_N).collect();
-        if contact.is_empty() {
+        let Some(level_n) = ContactLevel::of(levels_n).map(|contact| contact.median_n) else {
             return;
-        }
-        contact.sort_by(f64::total_cmp);
-        let level_n = contact[contact.len() / 2];
+        };
         if rms_n > FIT_SHARE * level_n {
             self.warnings.push(format!(
                 "force profile `{name}` is fitted with {rms_n:.2} N RMS error, {:.0} % of its level of {level_n:.2} N: \
@@ -164,17 +164,59 @@ pub(super) const FORCE_RATIO_MIN: f64 = 0.5;
 /// See [`FORCE_RATIO_MIN`].
 pub(super) const FORCE_RATIO_MAX: f64 = 2.0;
 
-/// Refuses a constant force outside [`FORCE_RATIO_MIN`]-[`FORCE_RATIO_MAX`] times the median of
-/// the segment's contact samples (those pushing with more than the contact threshold): a value
-/// learned from a short steady stretch of a hand's load between contacts (2.2 N for a wipe's
-/// 21 N) is not the demonstrator's intent. A segment without contact samples is refused earlier.
-fn check_against_recording(name: &str, learned_n: f64, profile: &[f64], region_s: [f64; 2]) -> Result<(), LearnError> {
-    let mut contact: Vec<f64> = profile.iter().copied().filter(|&f| f > CONTACT_N).collect();
-    if contact.is_empty() {
-        return Ok(());
+/// The contact samples of a force profile (those pushing with more than the contact
+/// threshold): their level, and where the first and last of them lie.
+struct ContactLevel {
+    /// The samples' forces, sorted \[N\].
+    sorted_n: Vec<f64>,
+    /// Their median \[N\].
+    median_n: f64,
+    /// The profile's first contact sample.
+    first: usize,
+    /// Its last.
+    last: usize,
+}
+
+impl ContactLevel {
+    /// `None` when no sample of `profile` is in contact.
+    fn of(profile: &[f64]) -> Option<ContactLevel> {
+        let first = profile.iter().position(|&f| f > CONTACT_N)?;
+        let last = profile.iter().rposition(|&f| f > CONTACT_N)?;
+        let mut sorted_n: Vec<f64> = profile.iter().copied().filter(|&f| f > CONTACT_N).collect();
+        sorted_n.sort_by(f64::total_cmp);
+        let median_n = sorted_n[sorted_n.len() / 2];
+        Some(ContactLevel {
+            sorted_n,
+            median_n,
+            first,
+            last,
+        })
     }
-    contact.sort_by(f64::total_cmp);
-    let median_n = contact[contact.len() / 2];
+
+    /// Whether a steady stretch's force `steady_n` lies more than [`UNSTEADY_SHARE`] from the
+    /// contact's median: the contact held no steady force (a peeling stroke rises and falls).
+    fn unsteady(&self, steady_n: f64) -> bool {
+        (steady_n - self.median_n).abs() > UNSTEADY_SHARE * self.median_n
+    }
+
+    /// The samples' robust deviation from their median (1.4826 × MAD) \[N\].
+    fn deviation_n(&self) -> f64 {
+        let mut deviations: Vec<f64> = self.sorted_n.iter().map(|f| (f - self.median_n).abs()).collect();
+        deviations.sort_by(f64::total_cmp);
+        1.4826 * deviations[deviations.len() / 2]
+    }
+}
+
+/// Refuses a constant force outside [`FORCE_RATIO_MIN`]-[`FORCE_RATIO_MAX`] times the median of
+/// the segment's contact samples: a value learned from a short steady stretch of a hand's load
+/// between contacts (2.2 N for a wipe's 21 N) is not the demonstrator's intent.
+fn check_against_recording(
+    name: &str,
+    learned_n: f64,
+    contact: &ContactLevel,
+    region_s: [f64; 2],
+) -> Result<(), LearnError> {
+    let median_n = contact.median_n;
     if learned_n >= FORCE_RATIO_MIN * median_n && learned_n <= FORCE_RATIO_MAX * median_n {
         return Ok(());
     }
@@ -188,26 +230,8 @@ fn check_against_recording(name: &str, learned_n: f64, profile: &[f64], region_s
 }
 
 /// A steady stretch's force farther than this share from the contact's median means the
-/// contact held no steady force (a peeling stroke rises and falls): the median is learned.
+/// contact held no steady force: the median is learned.
 pub(super) const UNSTEADY_SHARE: f64 = 0.15;
-
-/// The median and robust deviation of the contact samples of `profile` (those over the
-/// contact threshold) when the steady value `steady_n` lies more than [`UNSTEADY_SHARE`] from
-/// that median; `None` when it lies within it, or there is no contact.
-fn unsteady_contact(profile: &[f64], steady_n: f64) -> Option<(f64, f64)> {
-    let mut contact: Vec<f64> = profile.iter().copied().filter(|&f| f > CONTACT_N).collect();
-    if contact.is_empty() {
-        return None;
-    }
-    contact.sort_by(f64::total_cmp);
-    let median_n = contact[contact.len() / 2];
-    if (steady_n - median_n).abs() <= UNSTEADY_SHARE * median_n {
-        return None;
-    }
-    let mut deviations: Vec<f64> = contact.iter().map(|f| (f - median_n).abs()).collect();
-    deviations.sort_by(f64::total_cmp);
-    Some((median_n, 1.4826 * deviations[deviations.len() / 2]))
-}
 
 /// A force profile fitted with an RMS error above this share of its level is warned about.
 pub(super) const FIT_SHARE: f64 = 0.15;

@@ -138,7 +138,9 @@ pub fn force_noise_n(force_n: &[Vector3<f64>]) -> f64 {
     median_of(&mut per_axis.to_vec())
 }
 
-fn median_of(values: &mut [f64]) -> f64 {
+/// The median of `values` (sorted in place): the mean of the middle two for an even count, 0 for
+/// none.
+pub(crate) fn median_of(values: &mut [f64]) -> f64 {
     if values.is_empty() {
         return 0.0;
     }

@@ -32,6 +32,8 @@
 
 use nalgebra::Vector3;
 
+use crate::phases::median_of as median;
+
 /// A run of at least this many bit-identical force vectors is a frozen sensor.
 pub const FROZEN_RUN: usize = 5;
 /// Width of the centred moving average \[s\] (its first zero at 10 Hz: tremor averages out).
@@ -396,18 +398,6 @@ fn anchors(
         }
     }
     out
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    if n == 0 {
-        0.0
-    } else if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    }
 }
 
 fn median_vector(vectors: &[Vector3<f64>]) -> Vector3<f64> {
